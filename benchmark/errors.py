@@ -1,0 +1,26 @@
+"""Errors a user can act on. The command-line entry points print them without a traceback
+(set ``IMBENCH_DEBUG=1`` for one) and exit with status 2."""
+
+from __future__ import annotations
+
+
+class UserError(Exception):
+    """Base class: a message that names what to fix (file, column, row, or config key)."""
+
+
+class DataError(UserError):
+    """A data set on disk is malformed. The message names the file, and the column and row
+    where they are known."""
+
+    def __init__(self, path, message: str, column: str | None = None, row: int | None = None):
+        where = str(path)
+        if column is not None:
+            where += f", column '{column}'"
+        if row is not None:
+            where += f", row {row}"
+        super().__init__(f"{where}: {message}")
+        self.path, self.column, self.row = str(path), column, row
+
+
+class ConfigError(UserError):
+    """A configuration value is invalid. The message starts with the config key."""
