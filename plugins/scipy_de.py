@@ -55,8 +55,8 @@ def minimize(
         raise ValueError(f"scipy_de: init must be 'latinhypercube' or 'random', got {init!r}")
     npop = max(5, int(popsize) * max(1, n))
     maxiter = max(0, math.ceil(problem.remaining / npop) - 1)
-    if isinstance(mutation, (list, tuple)):
-        mutation = tuple(float(m) for m in mutation)
+    # a (low, high) pair arrives from YAML as a ListConfig: make it a plain tuple for SciPy
+    mutation = float(mutation) if np.isscalar(mutation) else tuple(float(m) for m in mutation)
 
     def cost(u: np.ndarray) -> np.ndarray:
         # vectorized=True: u has shape (n_var, S); return (S,)
