@@ -88,6 +88,10 @@ class Problem(ABC):
     def has_residuals(self) -> bool:
         return type(self).residuals is not Problem.residuals
 
+    def residuals_batch(self, X: np.ndarray) -> np.ndarray:
+        """Residual vectors of a population, (n_pop, n_residuals); override to batch."""
+        return np.stack([self.residuals(x) for x in np.atleast_2d(X)])
+
     def cost_from_residuals(self, r: np.ndarray) -> float:
         """The problem's own cost from its residual vector, without simulating again.
 
@@ -208,6 +212,17 @@ class BudgetedProblem:
         cost = self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
         self._record(x[None, :], np.array([cost]))
         return r
+
+    def residuals_batch(self, X: np.ndarray) -> np.ndarray:
+        """Residual vectors of a population (e.g. a finite-difference Jacobian's points), each
+        counted as one evaluation. Raises BudgetExhausted if the batch does not fit the budget."""
+        X = np.atleast_2d(np.asarray(X, float))
+        if len(X) > self.remaining:
+            raise BudgetExhausted(f"budget of {self.budget} evaluations spent")
+        R = np.asarray(self.problem.residuals_batch(X), float)
+        cost = np.array([self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf for r in R])
+        self._record(X, cost)
+        return R
 
     def _record(self, X: np.ndarray, c: np.ndarray) -> None:
         k = int(np.argmin(c)) if len(c) else 0

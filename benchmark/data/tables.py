@@ -39,12 +39,19 @@ def read_meta(folder: Path, required: dict[str, type | tuple[type, ...]]) -> dic
     for key, kind in required.items():
         if key not in meta:
             raise DataError(path, f"missing key '{key}'")
-        check_meta_type(path, key, meta[key], kind)
+        meta[key] = check_meta_type(path, key, meta[key], kind)
     return meta
 
 
-def check_meta_type(path: Path, key: str, value, kind) -> None:
+def check_meta_type(path: Path, key: str, value, kind):
+    """Check a meta.yaml value's type and return it (a float written as ``1e-3``, which YAML
+    reads as a string, is accepted as the number)."""
     kinds = kind if isinstance(kind, tuple) else (kind,)
+    if float in kinds and isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            pass
     ok = any(
         isinstance(value, k) and not (k in (int, float) and isinstance(value, bool)) for k in kinds
     )
@@ -53,6 +60,7 @@ def check_meta_type(path: Path, key: str, value, kind) -> None:
     if not ok:
         names = " or ".join(k.__name__ for k in kinds)
         raise DataError(path, f"key '{key}' must be {names}, got {value!r}")
+    return value
 
 
 def read_table(

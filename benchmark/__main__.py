@@ -1,0 +1,29 @@
+"""``python -m benchmark``: one identification run (or a sweep with ``-m``).
+
+With no arguments it makes the paper's synthetic case (Alonge et al. 1998, noise-free) and
+identifies it with the GENESIS clone at the paper's settings. See README for the options.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+
+from benchmark.cli import run_hydra_main, user_errors
+from benchmark.harness import format_table, run
+
+
+@hydra.main(version_base="1.3", config_path="../conf", config_name="config")
+@user_errors
+def main(cfg) -> float | None:
+    outdir = Path(HydraConfig.get().runtime.output_dir)
+    outcome = run(cfg, outdir)
+    print(format_table(outcome.record))
+    print(f"result: {outdir / 'result.json'}")
+    return outcome.record["cost"]
+
+
+if __name__ == "__main__":
+    run_hydra_main(main)
