@@ -3,16 +3,21 @@
 A local method: it starts from ``problem.crude_start()`` (the documented crude start, the
 geometric centre of the bounds for positive bounds) and works on the problem's residual
 vector, in normalised coordinates ``u`` in ``[0, 1]^n`` (``x = lower + u * (upper - lower)``)
-with the box as bounds and ``x_scale='jac'`` by default. The Jacobian is by finite
-differences; every residual evaluation, Jacobian columns included, is one counted evaluation.
+with the box as bounds and ``x_scale='jac'`` by default.
 
-Budget: ``problem.residuals`` raises ``BudgetExhausted`` once the budget is spent; the plugin
-catches it and ends the run there. ``max_nfev`` is also set to the budget, but SciPy does not
-count finite-difference Jacobian evaluations in it, so it is only a second guard. When trf
+The Jacobian is a forward difference with step ``diff_step`` (in normalised units, i.e. a
+fraction of each range; taken inwards at the upper bound) whose ``n_var`` points are simulated
+in ONE batch (``problem.residuals_batch``). Every residual vector, Jacobian points included, is
+one counted evaluation.
+
+Budget: the harness raises ``BudgetExhausted`` once the budget is spent; when the last
+Jacobian does not fit, the points that still fit are evaluated (so the run ends at exactly the
+budget) and the run stops. ``max_nfev`` is also set to the budget, but SciPy counts only
+residual calls at trial points in it, not Jacobians, so it is only a second guard. When trf
 meets its own tolerances first, the run ends before the budget and the message says so.
 
 Non-finite residuals (a diverging simulation) are replaced by ``nonfinite_residual`` so that
-trf sees a large, finite misfit and keeps going.
+trf sees a large, finite misfit and its trust region just shrinks.
 
 Problems without a residual vector: with ``no_residuals: sqrt_cost`` (default) the plugin
 minimises the one-element residual ``sqrt(cost)`` (valid for non-negative costs; a negative
@@ -39,7 +44,7 @@ def minimize(
     xtol: float = 1e-8,
     gtol: float = 1e-8,
     x_scale: str | float = "jac",
-    diff_step: float | None = None,
+    diff_step: float = 1e-7,
     loss: str = "linear",
     f_scale: float = 1.0,
     nonfinite_residual: float = 1e6,
@@ -47,41 +52,61 @@ def minimize(
 ) -> OptimizerOutput:
     """Minimise the residual vector of ``problem`` with SciPy's trf from the crude start."""
     del seed  # deterministic method
-    n = problem.n_var
     lo, span = problem.lower, problem.upper - problem.lower
     big = float(nonfinite_residual)
     if not (np.isfinite(big) and big > 0):
         raise ValueError(f"least_squares: nonfinite_residual must be a positive finite number, got {big}")
+    step = float(diff_step)
+    if not (0.0 < step < 0.5):
+        raise ValueError(f"least_squares: diff_step must be in (0, 0.5) (normalised units), got {step}")
+    if not problem.has_residuals:
+        if no_residuals == "error":
+            raise ValueError(
+                "least_squares: this plugin needs a residual vector, and the problem has none "
+                "(set no_residuals: sqrt_cost to minimise sqrt(cost) instead)"
+            )
+        if no_residuals != "sqrt_cost":
+            raise ValueError(
+                f"least_squares: no_residuals must be 'sqrt_cost' or 'error', got {no_residuals!r}"
+            )
 
-    if problem.has_residuals:
-
-        def raw(x: np.ndarray) -> np.ndarray:
-            return np.asarray(problem.residuals(x), float).ravel()
-
-    elif no_residuals == "sqrt_cost":
-
-        def raw(x: np.ndarray) -> np.ndarray:
-            if problem.exhausted:
-                raise BudgetExhausted(f"budget of {problem.budget} evaluations spent")
-            c = problem.evaluate_one(x)
-            if c < 0:
+    def residual_rows(U: np.ndarray) -> np.ndarray:
+        """Residual vectors at the rows of U (normalised), one batch; every row counted. If not
+        all rows fit the budget, the ones that fit are evaluated, then BudgetExhausted."""
+        X = lo + np.clip(np.atleast_2d(U), 0.0, 1.0) * span
+        k = min(len(X), problem.remaining)
+        if k == 0:
+            raise BudgetExhausted(f"budget of {problem.budget} evaluations spent")
+        if problem.has_residuals:
+            if hasattr(problem, "residuals_batch"):
+                R = np.asarray(problem.residuals_batch(X[:k]), float).reshape(k, -1)
+            else:
+                R = np.stack([np.asarray(problem.residuals(x), float).ravel() for x in X[:k]])
+        else:
+            c = problem.evaluate(X[:k])
+            if np.any(c < 0):
                 raise ValueError(
                     f"least_squares: the problem has no residual vector and its cost is negative "
-                    f"({c:g}), so sqrt(cost) cannot stand in for one; use a global optimiser"
+                    f"({c.min():g}), so sqrt(cost) cannot stand in for one; use a global optimiser"
                 )
-            return np.array([np.sqrt(c)])
+            R = np.sqrt(c)[:, None]
+        if k < len(X):
+            raise BudgetExhausted(f"budget of {problem.budget} evaluations spent")
+        return np.where(np.isfinite(R), R, big)
 
-    elif no_residuals == "error":
-        raise ValueError(
-            "least_squares: this plugin needs a residual vector, and the problem has none "
-            "(set no_residuals: sqrt_cost to minimise sqrt(cost) instead)"
-        )
-    else:
-        raise ValueError(f"least_squares: no_residuals must be 'sqrt_cost' or 'error', got {no_residuals!r}")
+    cache: dict[str, np.ndarray] = {}
 
     def fun(u: np.ndarray) -> np.ndarray:
-        r = raw(lo + np.clip(u, 0.0, 1.0) * span)
-        return np.where(np.isfinite(r), r, big)
+        r = residual_rows(u[None, :])[0]
+        cache["u"], cache["r"] = np.array(u, float), r
+        return r
+
+    def jac(u: np.ndarray) -> np.ndarray:
+        # trf asks for the Jacobian at the point whose residuals it just computed
+        r0 = cache["r"] if "u" in cache and np.array_equal(cache["u"], u) else fun(u)
+        h = np.where(u + step > 1.0, -step, step)  # inwards at the upper bound
+        R = residual_rows(u[None, :] + np.diag(h))
+        return ((R - r0[None, :]) / h[:, None]).T
 
     u0 = np.clip((problem.crude_start() - lo) / span, 0.0, 1.0)
     x_scale = x_scale if isinstance(x_scale, str) else float(x_scale)
@@ -89,13 +114,13 @@ def minimize(
         res = least_squares(
             fun,
             u0,
-            bounds=(np.zeros(n), np.ones(n)),
+            jac=jac,
+            bounds=(np.zeros_like(u0), np.ones_like(u0)),
             method="trf",
             ftol=ftol,
             xtol=xtol,
             gtol=gtol,
             x_scale=x_scale,
-            diff_step=diff_step,
             loss=loss,
             f_scale=float(f_scale),
             max_nfev=max(1, problem.remaining),
@@ -108,5 +133,5 @@ def minimize(
         msg = "evaluation budget spent"
     else:
         msg = f"converged before the budget: {res.message}"
-    # trf makes one residual evaluation per iteration (Jacobian columns aside): nfev = iterations
+    # trf makes one residual evaluation per iteration (Jacobians aside): nfev = iterations
     return OptimizerOutput(x=x, nit=int(res.nfev), message=msg)
