@@ -15,6 +15,9 @@ when cma stops on its own criteria (tolfun, tolx, flat fitness...) it restarts f
 random point with a population ``incpopsize`` times larger (IPOP-CMA-ES, Auger & Hansen
 2005), up to ``restarts`` times; every start gets ``maxfevals`` = the evaluations still left.
 
+In 1-D (where cma 4.5 fails with bounds) the search runs in 2-D and ignores the second
+coordinate.
+
 Seeding: cma samples with NumPy's *global* random state and treats seed 0 (or None) as
 "seed from the clock". The plugin derives a non-zero cma seed for every start from ``seed``,
 and saves/restores the global NumPy state around the run, so a run depends only on ``seed``
@@ -81,6 +84,8 @@ def minimize(
             f"cmaes: boundary_handler must be BoundTransform or BoundPenalty, got {boundary_handler!r}"
         )
     extra = {str(k): _plain(v) for k, v in options.items()} if options else {}
+    # cma 4.5 fails in 1-D with bounds (sigma_vec not initialised): search 2-D, ignore the 2nd
+    n_cma = max(n, 2)
 
     ss = np.random.SeedSequence(int(seed) & 0xFFFFFFFFFFFFFFFF)
     start_rng = np.random.default_rng(ss.spawn(1)[0])
@@ -110,11 +115,11 @@ def minimize(
                 if lam is not None:
                     opts["popsize"] = int(lam)
                 opts.update(extra)
-                x0 = start_rng.uniform(0.0, 1.0, n)
+                x0 = start_rng.uniform(0.0, 1.0, n_cma)
                 es = cma.CMAEvolutionStrategy(x0, float(sigma0), opts)
                 while not problem.exhausted and not es.stop():
                     sols = es.ask()  # told back unchanged, so cma finds its own genotypes
-                    U = np.clip(np.asarray(sols, float), 0.0, 1.0)
+                    U = np.clip(np.asarray(sols, float)[:, :n], 0.0, 1.0)
                     k = min(len(U), problem.remaining)
                     c = np.full(len(U), np.inf)
                     c[:k] = problem.evaluate(lo + U[:k] * span)
