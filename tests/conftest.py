@@ -1,0 +1,29 @@
+"""Shared fixtures: the paper's motor and its synthetic records (computed once per session)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+
+from benchmark.model.experiment import StartupStopTest, run_startup_stop
+from benchmark.model.motor import InductionMotor
+
+CONF = str(Path(__file__).resolve().parents[1] / "conf")
+PAPER_MOTOR = InductionMotor(Rs=4.96434, Ls=0.1075, Le=0.01098, Rr=1.55618, J=0.00642, fv=0.00033, fc=0.04297, p=1)
+
+
+def compose_config(overrides=(), name: str = "config"):
+    with initialize_config_dir(config_dir=CONF, version_base="1.3"):
+        return compose(name, overrides=list(overrides))
+
+
+@pytest.fixture(scope="session")
+def paper_motor():
+    return PAPER_MOTOR
+
+
+@pytest.fixture(scope="session")
+def paper_records():
+    return run_startup_stop(PAPER_MOTOR, StartupStopTest())
