@@ -1,0 +1,275 @@
+"""Synthetic Lindsay-Barton slip sweeps (MODEL.md sections 5 and 7, kind ``admittance``).
+
+The bench: the machine is held by a speed-controlled work machine and ramped at
+``test.ramp_rpm_per_s`` from ``speed_start_rpm`` to ``speed_stop_rpm`` at constant phase voltage,
+with a reading of G, B (and the electromagnetic torque) every ``speed_step_rpm``; optionally more
+voltage levels (one sweep each) and a down-sweep after each up-sweep. The stator DC resistance is
+measured at ``t = 0`` (machine at the start speed, supply about to be connected; the first reading
+follows ``settle_s`` later) and ``dc_after_delay_s`` after the last reading (supply off).
+
+Warming (``test.warming``): the one-body thermal model of :class:`benchmark.model.circuit.ThermalModel`
+is integrated along the whole session on a fine time grid, heated by all electrical losses
+(``P_in - P_mech``: stator and rotor copper and core losses; in braking the shaft power too), with the
+copper resistances R1, R2 following the temperature. Between sweeps without a down-sweep the supply
+is off and the speed returns to the start unexcited. The data carry the DC resistances, their times,
+the winding temperature at the first DC measurement, and the cooling rates ``K/C`` (what two cooling
+curves give; the capacitance, i.e. the heating scale, stays unknown to the identification).
+
+Noise (``cfg.noise.admittance_fraction``): white Gaussian noise of standard deviation ``fraction *
+full_scale_admittance`` on G and on B, and ``fraction * full_scale_torque`` on the torque, from
+``numpy.random.default_rng(noise.seed)``. DC resistances are exact (a four-wire measurement).
+
+``truth.yaml`` holds the parameters at the reference temperature, the temperatures, the noise, and the
+injected effects with their sizes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from benchmark.data.admittance import AdmittanceData, write_admittance
+from benchmark.errors import ConfigError
+from benchmark.model.circuit import (
+    CircuitParameters,
+    ThermalModel,
+    operating_point,
+    slip_from_speed,
+    synchronous_speed_rpm,
+)
+
+__all__ = ["make_dataset", "generate", "parameters_from_config", "nice_ceiling"]
+
+FINE_STEP_S = 0.05
+
+
+def _sel(cfg, key, default=None):
+    v = OmegaConf.select(cfg, key, default=default) if OmegaConf.is_config(cfg) else default
+    return default if v is None else v
+
+
+def parameters_from_config(cfg) -> CircuitParameters:
+    """The true circuit (ohm at the test frequency, at ``motor.reference_temperature``)."""
+    p = _sel(cfg, "motor.parameters")
+    if p is None:
+        raise ConfigError(
+            "motor.parameters: the admittance motor preset must give the circuit parameters "
+            "R1, X1, R2, X2, R0, X0 (and R1sigma, R2sigma, X3 for the 8-parameter machine)"
+        )
+    try:
+        return CircuitParameters.from_mapping(OmegaConf.to_container(p) if OmegaConf.is_config(p) else p)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ConfigError(f"motor.parameters: {exc}") from None
+
+
+def nice_ceiling(x: float) -> float:
+    """Smallest of 1, 1.5, 2, 2.5, 3, 4, 5, 6, 8, 10 x 10^k not below ``x``: an instrument range."""
+    k = np.floor(np.log10(x))
+    for m in (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0):
+        if m * 10**k >= x * (1 - 1e-12):
+            return float(m * 10**k)
+    return float(10 ** (k + 1))
+
+
+def _schedule(test, voltages):
+    """Segments ``(t0, t1, n0, n1, V)`` (V = 0: supply off) and readings ``(t, n, V, sweep)``."""
+    n_a, n_b = float(test["speed_start_rpm"]), float(test["speed_stop_rpm"])
+    step, ramp = float(test["speed_step_rpm"]), float(test["ramp_rpm_per_s"])
+    settle = float(test["settle_s"])
+    if ramp <= 0 or step <= 0:
+        raise ConfigError("motor.test.ramp_rpm_per_s and speed_step_rpm: must be positive")
+    if n_b <= n_a:
+        raise ConfigError(f"motor.test.speed_stop_rpm: must exceed speed_start_rpm ({n_b} <= {n_a})")
+    up = np.arange(n_a, n_b + step / 2, step)
+    down = up[::-1][1:]
+    T = (n_b - n_a) / ramp
+    segs, reads = [], []
+    t, sweep = 0.0, 0
+    for k, V in enumerate(voltages):
+        if k > 0 and not test["down_sweep"]:
+            segs.append((t, t + T, n_b, n_a, 0.0))  # back to the start, unexcited
+            t += T
+        segs.append((t, t + settle, n_a, n_a, V))
+        t += settle
+        segs.append((t, t + T, n_a, n_b, V))
+        reads += [(t + (n - n_a) / ramp, n, V, sweep) for n in up]
+        t += T
+        sweep += 1
+        if test["down_sweep"]:
+            segs.append((t, t + T, n_b, n_a, V))
+            reads += [(t + (n_b - n) / ramp, n, V, sweep) for n in down]
+            t += T
+            sweep += 1
+    return segs, reads, t
+
+
+def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
+    """The sweep data set and its truth document for the composed config (motor preset + noise)."""
+    params = parameters_from_config(cfg)
+    f = float(_sel(cfg, "motor.frequency", 60.0))
+    p = int(_sel(cfg, "motor.pole_pairs", 2))
+    theta_ref = float(_sel(cfg, "motor.reference_temperature", 50.0))
+    test_defaults = {
+        "voltages": [30.2],
+        "speed_start_rpm": -1800.0,
+        "speed_stop_rpm": 2400.0,
+        "speed_step_rpm": 100.0,
+        "ramp_rpm_per_s": 25.0,
+        "down_sweep": False,
+        "settle_s": 20.0,
+        "dc_after_delay_s": 5.0,
+        "warming": True,
+        "full_scale_admittance": None,
+        "record_torque": True,
+    }
+    test_cfg = _sel(cfg, "motor.test", {})
+    test_cfg = OmegaConf.to_container(test_cfg) if OmegaConf.is_config(test_cfg) else dict(test_cfg)
+    unknown = set(test_cfg) - set(test_defaults)
+    if unknown:
+        raise ConfigError(f"motor.test: unknown key(s) {sorted(unknown)}; known: {sorted(test_defaults)}")
+    test = test_defaults | test_cfg
+    voltages = [float(v) for v in np.atleast_1d(test["voltages"])]
+    if not voltages or min(voltages) <= 0:
+        raise ConfigError(f"motor.test.voltages: positive phase voltages (V RMS) needed, got {voltages}")
+
+    th = _sel(cfg, "motor.thermal", {})
+    th = OmegaConf.to_container(th) if OmegaConf.is_config(th) else dict(th)
+    warming = bool(test["warming"])
+    if warming:
+        try:
+            thermal = ThermalModel(
+                capacitance=float(th["capacitance"]),
+                conductance_standstill=float(th["conductance_standstill"]),
+                conductance_at_speed=float(th["conductance_at_speed"]),
+                conductance_speed_rpm=float(th["conductance_speed_rpm"]),
+                ambient_temperature=float(th["ambient_temperature"]),
+            )
+        except KeyError as exc:
+            raise ConfigError(
+                f"motor.thermal.{exc.args[0]}: needed when motor.test.warming is true"
+            ) from None
+    theta0 = float(th.get("initial_temperature", theta_ref))
+
+    segs, reads, t_end = _schedule(test, voltages)
+    t_read = np.array([r[0] for r in reads])
+    n_read = np.array([r[1] for r in reads])
+    v_read = np.array([r[2] for r in reads])
+    sweep = np.array([r[3] for r in reads], int)
+    t_after = t_end + float(test["dc_after_delay_s"])
+
+    # temperature along the session: exact exponential steps, losses at the step midpoint
+    if warming:
+        grid = [0.0]
+        for t0, t1, *_ in segs:
+            m = max(1, int(np.ceil((t1 - t0) / FINE_STEP_S)))
+            grid += list(np.linspace(t0, t1, m + 1)[1:])
+        grid = np.unique(np.concatenate([grid, t_read, [t_after]]))
+        theta = np.empty_like(grid)
+        theta[0] = theta0
+        starts = np.array([sg[0] for sg in segs])
+        for i in range(len(grid) - 1):
+            tm = 0.5 * (grid[i] + grid[i + 1])
+            j = int(np.searchsorted(starts, tm, side="right")) - 1
+            if j < len(segs) and tm <= segs[j][1]:
+                t0, t1, n0, n1, V = segs[j]
+                n = n0 + (n1 - n0) * (tm - t0) / (t1 - t0) if t1 > t0 else n0
+            else:  # after the last reading: supply off, speed held
+                n, V = segs[-1][3], 0.0
+            P = 0.0
+            if V > 0:
+                op = operating_point(
+                    params.at_temperature(theta[i], theta_ref), slip_from_speed(n, f, p), V, f, p
+                )
+                P = float(op.P_in - op.P_mech)
+            theta[i + 1] = thermal.step(theta[i], P, n, grid[i + 1] - grid[i])
+        theta_read = np.interp(t_read, grid, theta)
+        theta_after = float(np.interp(t_after, grid, theta))
+    else:
+        theta_read = np.full(len(t_read), theta0)
+        theta_after = theta0
+
+    s = slip_from_speed(n_read, f, p)
+    k = (234.5 + theta_read) / (234.5 + theta_ref)
+    warm = CircuitParameters(**(params.to_dict() | {"R1": params.R1 * k, "R2": params.R2 * k}))
+    op = operating_point(warm, s, v_read, f, p)
+    Y, T = op.Y, op.torque
+    fs = test["full_scale_admittance"]
+    fs = float(fs) if fs is not None else nice_ceiling(float(np.max(np.abs(Y))))
+    fs_T = nice_ceiling(float(np.max(np.abs(T))))
+
+    frac = float(_sel(cfg, "noise.admittance_fraction", 0.0))
+    seed = int(_sel(cfg, "noise.seed", 0))
+    rng = np.random.default_rng(seed)
+    G = Y.real + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
+    B = Y.imag + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
+    torque = T + (rng.normal(0.0, frac * fs_T, len(s)) if frac > 0 else 0.0)
+
+    R_dc = (
+        params.R1 * (234.5 + theta0) / (234.5 + theta_ref),
+        params.R1 * (234.5 + theta_after) / (234.5 + theta_ref),
+    )
+    data = AdmittanceData(
+        frequency=f,
+        pole_pairs=p,
+        slip=s,
+        G=np.asarray(G, float),
+        B=np.asarray(B, float),
+        voltage=v_read,
+        time=t_read,
+        torque=np.asarray(torque, float) if test["record_torque"] else None,
+        sweep=sweep,
+        full_scale_admittance=fs,
+        full_scale_torque=fs_T,
+        stator_dc_resistance=R_dc,
+        dc_resistance_time=(0.0, t_after),
+        winding_temperature_before=theta0,
+        reference_temperature=theta_ref,
+        thermal=(
+            {
+                "ambient_temperature": thermal.ambient_temperature,
+                "cooling_rate_standstill": thermal.cooling_rate(0.0),
+                "cooling_rate_at_speed": thermal.cooling_rate(thermal.conductance_speed_rpm),
+                "cooling_rate_speed_rpm": thermal.conductance_speed_rpm,
+            }
+            if warming
+            else None
+        ),
+        supply_off=[(t0, t1) for t0, t1, _, _, V in segs if V == 0] or None,
+        source="synthetic",
+        description=f"synthetic Lindsay-Barton sweep, motor {_sel(cfg, 'motor.name', '?')}, "
+        f"{len(voltages)} voltage level(s), down-sweep {bool(test['down_sweep'])}",
+    )
+    truth = {
+        "kind": "admittance",
+        "motor": str(_sel(cfg, "motor.name", "?")),
+        "model": "6-parameter" if params.is_six_parameter else "8-parameter",
+        "reference_temperature": theta_ref,
+        "parameters": params.to_dict() | {"R1_total": params.R1_total},
+        "temperature": {
+            "before": theta0,
+            "after": theta_after,
+            "first_reading": float(theta_read[0]),
+            "last_reading": float(theta_read[-1]),
+        },
+        "noise": {
+            "admittance_fraction": frac,
+            "seed": seed,
+            "full_scale_admittance": fs,
+            "full_scale_torque": fs_T,
+        },
+        "effects": {
+            "temperature_drift": {"rise_C": float(theta_read.max() - theta0)} if warming else None,
+            "leakage_core_loss": {"R1sigma": params.R1sigma, "R2sigma": params.R2sigma},
+            "leakage_saturation": {"X3": params.X3},
+        },
+        "synchronous_speed_rpm": synchronous_speed_rpm(f, p),
+    }
+    return data, truth
+
+
+def generate(cfg, outdir: Path) -> Path:
+    """Write the data set of :func:`make_dataset` (section 7 format + truth.yaml) to ``outdir``."""
+    data, truth = make_dataset(cfg)
+    return write_admittance(Path(outdir), data, truth=truth)
