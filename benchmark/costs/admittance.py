@@ -607,7 +607,8 @@ class AdmittanceProblem(Problem):
           slip, with an outer search over ``R2sigma/R2``, ``X3/R2``), mapped back to the circuit with
           ``X1``, ``X2`` free when that gives a circuit inside the bounds, else with the tie ``X1 = X2``
           (:attr:`last_mapping` says which); with temperature compensation the data are then referred
-          to the reference temperature with that circuit and the regression repeated (three passes).
+          to the reference temperature with that circuit and the regression repeated until the circuit
+          stops changing (at most 10 passes).
 
         Returns None for an unknown kind."""
         kind = str(kind).upper()
@@ -651,19 +652,26 @@ class AdmittanceProblem(Problem):
 
     def _model_e(self) -> dict[str, float]:
         Y = self._Ym
-        passes = 3 if self.compensated else 1
         warp0 = (0.05, 0.02)
-        for _ in range(passes):
+        x_prev = None
+        for _ in range(10 if self.compensated else 1):
             reg = bilinear_regression(self._s, Y, self._w, model=self.model, warp0=warp0)
             out = self._pick_mapping(reg)
             warp0 = (reg["rho"], reg["xi"])
-            if self.compensated:  # refer the data to the reference temperature with this circuit
-                x = np.array([out[n] for n in self.parameter_names])
-                c = self.full_parameters(x)
-                Y_ref = input_admittance(
-                    self._s, c["R1_total"], c["X1"], c["R2"], c["X2"], c["R0"], c["X0"], c["R2sigma"], c["X3"]
-                )[0]
-                Y = self._Ym + (Y_ref - self.admittance(x)[0])
+            if not self.compensated:
+                break
+            # refer the data to the reference temperature with this circuit, and fit again until the
+            # circuit stops changing (a fixed point: the data corrected by the fitted circuit's own
+            # temperature effect are fitted by that circuit)
+            x = np.array([out[n] for n in self.parameter_names])
+            if x_prev is not None and np.all(np.abs(x - x_prev) <= 1e-10 * np.maximum(np.abs(x), 1e-12)):
+                break
+            x_prev = x
+            c = self.full_parameters(x)
+            Y_ref = input_admittance(
+                self._s, c["R1_total"], c["X1"], c["R2"], c["X2"], c["R0"], c["X0"], c["R2sigma"], c["X3"]
+            )[0]
+            Y = self._Ym + (Y_ref - self.admittance(x)[0])
         self.last_mapping = out["mapping"]
         return out
 
