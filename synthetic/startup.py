@@ -43,11 +43,46 @@ def add_noise(x: np.ndarray, std: float, quantum: float, rng: np.random.Generato
     return y
 
 
+def plant_with_effects(motor: InductionMotor, test: StartupStopTest, effects: list[str], sizes: dict,
+                       forms: dict, substeps: int) -> tuple[dict, list[dict]]:
+    """Simulate the experiment on the extended plant with the named effects injected.
+
+    Sizes default to the geometric middle of each effect's realistic range. Returns the
+    records and the list of injected effects (name, size, unit, form) for truth.yaml."""
+    from benchmark.effects import effect_context, load_effects
+    from benchmark.model.experiment import run_startup_stop_extended
+    from benchmark.model.extended import base_row
+
+    catalogue = load_effects("timedomain", names=list(effects))
+    row = base_row(motor)
+    base = run_startup_stop_extended(row, test, substeps)["startup"]
+    ctx = effect_context(base["t"], base["v_alpha"], base["v_beta"], base["i_alpha"], base["i_beta"],
+                         base["speed"], motor.p, motor.J, motor.Ls - motor.Le, motor.Le,
+                         test.dc_link_voltage)
+    injected = []
+    for name in effects:
+        eff = catalogue[name]
+        lo, hi = eff.realistic
+        size = float(sizes.get(name, np.sqrt(lo * hi)))
+        form = {**eff.form, **dict(forms.get(name, {}) or {})}
+        row = eff.plant(row, size, ctx, form)
+        injected.append({"name": name, "size": size, "size_name": eff.size_name, "unit": eff.size_unit,
+                         "form": form})
+    return run_startup_stop_extended(row, test, substeps), injected
+
+
 def make_dataset(cfg) -> tuple[StartupDataset, dict]:
-    """The data set and its truth document for the composed config (motor preset + noise)."""
+    """The data set and its truth document for the composed config (motor preset, optional
+    ``effects`` with ``effect_size``/``effect_form``, noise)."""
     motor = motor_from_config(cfg)
     test = test_from_config(cfg)
-    rec = run_startup_stop(motor, test, substeps=int(cfg.motor.get("plant_substeps", 4)))
+    substeps = int(cfg.motor.get("plant_substeps", 4))
+    effects = list(cfg.get("effects") or [])
+    if effects:
+        rec, injected = plant_with_effects(motor, test, effects, dict(cfg.get("effect_size") or {}),
+                                           dict(cfg.get("effect_form") or {}), substeps)
+    else:
+        rec, injected = run_startup_stop(motor, test, substeps=substeps), []
     noise = cfg.noise
     rng = np.random.default_rng(int(noise.seed))
     s, st = rec["startup"], rec["stop"]
@@ -75,7 +110,7 @@ def make_dataset(cfg) -> tuple[StartupDataset, dict]:
     )
     truth = {
         "parameters": motor.as_dict(),
-        "effects": [],
+        "effects": injected,
         "noise": {k: float(noise[k]) for k in ("current_std", "speed_std", "speed_quantum")}
         | {"seed": int(noise.seed)},
         "test": {k: (v if isinstance(v, str) else float(v)) for k, v in dict(cfg.motor.test).items()},

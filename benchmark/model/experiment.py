@@ -99,6 +99,33 @@ class StartupStopTest:
         return t, v_a, v_b
 
 
+def run_startup_stop_extended(row: np.ndarray, test: StartupStopTest, substeps: int = 4) -> dict:
+    """:func:`run_startup_stop` for an extended-model row (the plant with unmodelled effects)."""
+    from benchmark.model.extended import N_STATES, simulate_extended
+
+    t, v_a, v_b = test.startup_voltages()
+    linear = hold_is_linear(test.input_hold)
+    x = np.zeros(N_STATES)
+    y = simulate_extended(row, v_a, v_b, linear, test.sample_time, substeps, x)
+    startup = {"t": t, "v_alpha": v_a, "v_beta": v_b, "i_alpha": y[0], "i_beta": y[1], "speed": y[2]}
+    # one more step with the last start-up voltage, then the stator is shorted (v = 0)
+    simulate_extended(row, v_a[-1:].repeat(2), v_b[-1:].repeat(2), False, test.sample_time, substeps, x)
+    n_stop = int(round(test.stop_duration / test.sample_time)) + 1
+    zeros = np.zeros(n_stop)
+    w_m = simulate_extended(row, zeros, zeros, False, test.sample_time, substeps, x)[2]
+    return {"startup": startup, "stop": _stop_record(w_m, test)}
+
+
+def _stop_record(w_m: np.ndarray, test: StartupStopTest) -> dict:
+    """Decimate a simulated stop to ``stop_sample_time``, ending 0.5 s after rest."""
+    n_stop = len(w_m)
+    decimate = max(1, int(round(test.stop_sample_time / test.sample_time)))
+    at_rest = np.flatnonzero(w_m <= 0.0)
+    end = n_stop if len(at_rest) == 0 else min(n_stop, at_rest[0] + int(round(0.5 / test.sample_time)))
+    idx = np.arange(0, end, decimate)
+    return {"t": idx * test.sample_time, "speed": w_m[idx]}
+
+
 def run_startup_stop(motor: InductionMotor, test: StartupStopTest, substeps: int = 4) -> dict:
     """Simulate the experiment on the reference plant (RK4 with ``substeps`` per sample).
 
@@ -123,10 +150,4 @@ def run_startup_stop(motor: InductionMotor, test: StartupStopTest, substeps: int
     n_stop = int(round(test.stop_duration / test.sample_time)) + 1
     zeros = np.zeros(n_stop)
     xs = simulate_states(c, zeros, zeros, False, test.sample_time, substeps, x_end)
-    w_m = xs[:, 4] / motor.p
-    decimate = max(1, int(round(test.stop_sample_time / test.sample_time)))
-    at_rest = np.flatnonzero(w_m <= 0.0)
-    end = n_stop if len(at_rest) == 0 else min(n_stop, at_rest[0] + int(round(0.5 / test.sample_time)))
-    idx = np.arange(0, end, decimate)
-    stop = {"t": idx * test.sample_time, "speed": w_m[idx]}
-    return {"startup": startup, "stop": stop}
+    return {"startup": startup, "stop": _stop_record(xs[:, 4] / motor.p, test)}
