@@ -188,11 +188,11 @@ def write_startup_dataset(folder, ds: StartupDataset, truth: dict | None = None)
             folder / name,
             {"t": r.t, "v_alpha": r.v_alpha, "v_beta": r.v_beta, "i_alpha": r.i_alpha, "i_beta": r.i_beta,
              "speed": r.speed},
-            float_format="%.12g",
+            float_format="%.17g",
         )
     for k, r in enumerate(ds.stops):
         name = "stop.csv" if len(ds.stops) == 1 else f"stop_{k + 1}.csv"
-        write_table_atomic(folder / name, {"t": r.t, "speed": r.speed}, float_format="%.12g")
+        write_table_atomic(folder / name, {"t": r.t, "speed": r.speed}, float_format="%.17g")
     write_yaml_atomic(folder / "meta.yaml", ds.meta())
     if truth is not None:
         write_yaml_atomic(folder / "truth.yaml", truth)
