@@ -207,8 +207,6 @@ def setup_problem(cfg) -> TimeDomainProblem:
     """Build the problem from the composed config: synthetic data from ``cfg.motor`` when
     ``cfg.data.path`` is null, else the data set folder; conditioning; mechanical
     pre-identification; bounds from ``cfg.bounds``, the motor preset, or the data."""
-    pcfg = cfg.problem
-    truth = None
     if cfg.data.path is None:
         from synthetic.startup import make_dataset
 
@@ -219,8 +217,13 @@ def setup_problem(cfg) -> TimeDomainProblem:
         ds = load_startup_dataset(cfg.data.path)
         truth = read_truth_for_scoring(cfg.data.path)
         preset_bounds = cfg.motor.get("bounds") if cfg.get("use_motor_bounds_with_data", False) else None
-    ds = condition(ds, speed_filter=bool(pcfg.get("speed_filter", False)))
+    return problem_from_dataset(cfg, ds, truth, preset_bounds)
 
+
+def problem_from_dataset(cfg, ds: StartupDataset, truth: dict | None, preset_bounds) -> TimeDomainProblem:
+    """The problem for a loaded data set (``truth`` only for scoring; None for measured data)."""
+    pcfg = cfg.problem
+    ds = condition(ds, speed_filter=bool(pcfg.get("speed_filter", False)))
     case = int(pcfg.get("friction_case", 2))
     mechanical = None
     if ds.stops:
