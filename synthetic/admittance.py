@@ -35,6 +35,7 @@ from benchmark.errors import ConfigError
 from benchmark.model.circuit import (
     CircuitParameters,
     ThermalModel,
+    copper_factor,
     operating_point,
     slip_from_speed,
     synchronous_speed_rpm,
@@ -191,7 +192,7 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
         theta_after = theta0
 
     s = slip_from_speed(n_read, f, p)
-    k = (234.5 + theta_read) / (234.5 + theta_ref)
+    k = copper_factor(theta_read, theta_ref)
     warm = CircuitParameters(**(params.to_dict() | {"R1": params.R1 * k, "R2": params.R2 * k}))
     op = operating_point(warm, s, v_read, f, p)
     Y, T = op.Y, op.torque
@@ -206,9 +207,10 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     B = Y.imag + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
     torque = T + (rng.normal(0.0, frac * fs_T, len(s)) if frac > 0 else 0.0)
 
+    # the DC readings see the stator copper only (R1, not R1sigma)
     R_dc = (
-        params.R1 * (234.5 + theta0) / (234.5 + theta_ref),
-        params.R1 * (234.5 + theta_after) / (234.5 + theta_ref),
+        float(params.R1 * copper_factor(theta0, theta_ref)),
+        float(params.R1 * copper_factor(theta_after, theta_ref)),
     )
     data = AdmittanceData(
         frequency=f,

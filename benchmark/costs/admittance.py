@@ -313,6 +313,8 @@ class AdmittanceProblem(Problem):
     """
 
     name = "admittance"
+    #: the data set's truth document (truth.yaml or the in-memory one), for scoring scripts only
+    truth_document: dict | None = None
 
     def __init__(
         self,
@@ -399,7 +401,6 @@ class AdmittanceProblem(Problem):
                     f"of {data.source}"
                 )
             self._stall = self._stalled_reading()
-            self._n_res_total = self._n_res + 1
         self.truth = truth
         self.w_sync = 2 * np.pi * data.frequency / data.pole_pairs
 
