@@ -23,8 +23,17 @@ from benchmark.model.circuit import (
 )
 
 # Lindsay and Barton's 8-parameter model F (ohm at 60 Hz, 50 C)
-MODEL_F = CircuitParameters(R1=0.2045, R1sigma=0.0061, X1=0.5580, R2=0.2941, R2sigma=0.0340, X2=0.5579,
-                            X3=0.0093, R0=1.0592, X0=16.0998)
+MODEL_F = CircuitParameters(
+    R1=0.2045,
+    R1sigma=0.0061,
+    X1=0.5580,
+    R2=0.2941,
+    R2sigma=0.0340,
+    X2=0.5579,
+    X3=0.0093,
+    R0=1.0592,
+    X0=16.0998,
+)
 # their 6-parameter model D
 MODEL_D = CircuitParameters(R1=0.2337, X1=0.5521, R2=0.2983, X2=0.5530, R0=1.051, X0=16.11)
 F_HZ, P = 60.0, 2
@@ -41,12 +50,30 @@ def textbook_admittance(p: CircuitParameters, s: float) -> complex:
 
 def test_admittance_matches_textbook_reduction_and_synchronous_limit():
     for s in (2.0, 1.0, 0.3, 0.02, -0.05, -1 / 3):
-        y = input_admittance(s, MODEL_F.R1_total, MODEL_F.X1, MODEL_F.R2, MODEL_F.X2, MODEL_F.R0, MODEL_F.X0,
-                             MODEL_F.R2sigma, MODEL_F.X3)
+        y = input_admittance(
+            s,
+            MODEL_F.R1_total,
+            MODEL_F.X1,
+            MODEL_F.R2,
+            MODEL_F.X2,
+            MODEL_F.R0,
+            MODEL_F.X0,
+            MODEL_F.R2sigma,
+            MODEL_F.X3,
+        )
         assert y == pytest.approx(textbook_admittance(MODEL_F, s), rel=1e-13)
     # at s = 0 the rotor is open: Y = 1/(Z1 + Z0)
-    y0 = input_admittance(0.0, MODEL_F.R1_total, MODEL_F.X1, MODEL_F.R2, MODEL_F.X2, MODEL_F.R0, MODEL_F.X0,
-                          MODEL_F.R2sigma, MODEL_F.X3)
+    y0 = input_admittance(
+        0.0,
+        MODEL_F.R1_total,
+        MODEL_F.X1,
+        MODEL_F.R2,
+        MODEL_F.X2,
+        MODEL_F.R0,
+        MODEL_F.X0,
+        MODEL_F.R2sigma,
+        MODEL_F.X3,
+    )
     assert y0 == pytest.approx(1 / complex(0.2106 + 1.0592, 0.5580 + 16.0998), rel=1e-13)
     # lagging machine: B < 0 everywhere
     s = np.linspace(-1 / 3, 2, 200)
@@ -87,9 +114,15 @@ def test_torque_equals_rotor_current_times_effective_resistance():
 
 params_strategy = st.builds(
     CircuitParameters,
-    R1=st.floats(0.05, 2.0), X1=st.floats(0.1, 3.0), R2=st.floats(0.05, 2.0), X2=st.floats(0.1, 3.0),
-    R0=st.floats(0.0, 5.0), X0=st.floats(5.0, 60.0), R1sigma=st.floats(0.0, 0.05),
-    R2sigma=st.floats(0.0, 0.1), X3=st.floats(0.0, 0.05),
+    R1=st.floats(0.05, 2.0),
+    X1=st.floats(0.1, 3.0),
+    R2=st.floats(0.05, 2.0),
+    X2=st.floats(0.1, 3.0),
+    R0=st.floats(0.0, 5.0),
+    X0=st.floats(5.0, 60.0),
+    R1sigma=st.floats(0.0, 0.05),
+    R2sigma=st.floats(0.0, 0.1),
+    X3=st.floats(0.0, 0.05),
 )
 
 
@@ -141,8 +174,9 @@ def test_eight_parameter_circuit_leaves_the_circle_but_is_bilinear_in_the_warped
 
 
 def test_bilinear_mapping_back_recovers_the_circuit():
-    _, _, _, a, b, c = bilinear_coefficients(MODEL_D.R1_total, MODEL_D.X1, MODEL_D.R2, MODEL_D.X2, MODEL_D.R0,
-                                             MODEL_D.X0)
+    _, _, _, a, b, c = bilinear_coefficients(
+        MODEL_D.R1_total, MODEL_D.X1, MODEL_D.R2, MODEL_D.X2, MODEL_D.R0, MODEL_D.X0
+    )
     free = bilinear_to_circuit(a, b, c)
     for k, v in {"R1t": 0.2337, "X1": 0.5521, "R2": 0.2983, "X2": 0.5530, "R0": 1.051, "X0": 16.11}.items():
         assert free[k] == pytest.approx(v, rel=1e-10)
@@ -169,8 +203,13 @@ def test_copper_temperature_law_and_the_papers_five_degree_figures():
 
 
 def test_thermal_step_is_the_exact_solution():
-    th = ThermalModel(capacitance=11300.0, conductance_standstill=8.0, conductance_at_speed=20.0,
-                      conductance_speed_rpm=1800.0, ambient_temperature=25.0)
+    th = ThermalModel(
+        capacitance=11300.0,
+        conductance_standstill=8.0,
+        conductance_at_speed=20.0,
+        conductance_speed_rpm=1800.0,
+        ambient_temperature=25.0,
+    )
     assert th.conductance(900.0) == pytest.approx(14.0)
     assert th.conductance(-1800.0) == pytest.approx(20.0)
     P_w, n, dt = 800.0, 600.0, 30.0
