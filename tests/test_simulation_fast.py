@@ -237,3 +237,17 @@ def test_degenerate_populations(record):
     theta[:, 2] = theta[:, 1] * np.geomspace(1e-7, 1e-6, 20)
     cost = startup_cost_batch(coefficients(theta, 1), *args)
     assert np.all(cost == np.inf)
+
+
+def test_concurrent_calls_from_python_threads(record):
+    """The block functions release the GIL and share no state: calls from several Python
+    threads at once give the same bits as one call."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    coef = _population()
+    args = _args(record, 2)
+    ref = ref_cost_batch(coef, *args)
+    with ThreadPoolExecutor(3) as ex:
+        results = list(ex.map(lambda _: startup_cost_batch(coef, *args), range(6)))
+    for r in results:
+        np.testing.assert_array_equal(r, ref)

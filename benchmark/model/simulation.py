@@ -13,8 +13,11 @@ structure-of-arrays layout (row ``r`` of lane ``j`` at ``r*LANES + j``: the ten 
 the five states, the running cost and a divergence flag), so the loop over the lanes of one
 step has compile-time strides, no aliasing question and no branches (Coulomb friction,
 stiction and the divergence test are selects): LLVM turns it into SIMD code (8 float64 lanes
-with AVX-512, 4 with AVX2). Chunks are grouped into one block per thread and the blocks run in
-parallel (``prange``). Nothing is allocated per step.
+with AVX-512, 4 with AVX2). Chunks are grouped into one block of nearly equal size per thread
+(``numba.get_num_threads()``, set with ``numba.set_num_threads``); the compiled block
+functions release the GIL and run on a small thread pool (no ``parallel=True``: plain
+``nogil`` functions compile in about half the time, see ``python -m benchmark.perf``).
+Nothing is allocated per step, everything is cached on disk (``cache=True``).
 
 Every lane performs exactly the floating-point operations of the one-candidate RK4 step
 :func:`_rk4` in the same order, in float64 and without ``fastmath`` (no FMA contraction, no
@@ -29,6 +32,10 @@ costs ``+inf`` (never NaN); a chunk whose lanes have all diverged stops early.
 """
 
 from __future__ import annotations
+
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
@@ -52,7 +59,7 @@ _ALIVE_CHECK = 64
 
 
 # -- one candidate: the reference step (also the plant of simulate_states) ------------------------
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, h):
     d = 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
     k1 = state_derivative(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, d)
@@ -84,7 +91,7 @@ def _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, h):
     return n_ia, n_ib, n_pa, n_pb, n_w
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _stage_voltages(v_a, v_b, k, linear):
     va0, vb0 = v_a[k], v_b[k]
     if linear:
@@ -94,7 +101,7 @@ def _stage_voltages(v_a, v_b, k, linear):
 
 
 # -- many candidates: branch-free lanes of a chunk -------------------------------------------------
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _derivative_lane(a11, a13, c1, c2, a31, a33, kt, inv_tau, b_m, fc,
                      i_a, i_b, psi_a, psi_b, w, v_a, v_b, d):
     """:func:`benchmark.model.motor.state_derivative` with the friction cases as selects.
@@ -113,7 +120,7 @@ def _derivative_lane(a11, a13, c1, c2, a31, a33, kt, inv_tau, b_m, fc,
     return di_a, di_b, dpsi_a, dpsi_b, dw
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h):
     """One RK4 step of lanes ``0..nl-1`` of work buffer ``W`` (see the module docstring);
     operation for operation the same as :func:`_rk4`. Sets the lane's divergence flag."""
@@ -164,7 +171,7 @@ def _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h):
         W[_R_BAD * L + j] = W[_R_BAD * L + j] if ok else 1.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _all_diverged(W, nl):
     for j in range(nl):
         if W[_R_BAD * LANES + j] == 0.0:
@@ -173,13 +180,13 @@ def _all_diverged(W, nl):
 
 
 @numba.njit(cache=True)
-def _load_chunk(W, coef, idx, start, nl):
-    """Fill work buffer ``W`` for candidates ``idx[start:start+nl]``: coefficients, zero states."""
+def _load_chunk(W, coef_t, start, nl):
+    """Fill work buffer ``W`` with columns ``start..start+nl-1`` of the transposed coefficients
+    ``coef_t`` (N_COEF, n); states, cost and flags zero."""
     W[:] = 0.0
-    for j in range(nl):
-        m = idx[start + j]
-        for r in range(N_COEF):
-            W[r * LANES + j] = coef[m, r]
+    for r in range(N_COEF):
+        for j in range(nl):
+            W[r * LANES + j] = coef_t[r, start + j]
 
 
 @numba.njit(cache=True)
@@ -211,17 +218,34 @@ def _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_
             break
 
 
+@numba.njit(cache=True, nogil=True)
+def _cost_block(start, stop, coef_t, lanes, res, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p,
+                ka, kb, kw, exponent):
+    """Costs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``res[start:stop]``,
+    ``lanes`` at a time (+inf where diverged). Releases the GIL."""
+    W = np.empty(_N_ROWS * LANES)
+    s = start
+    while s < stop:
+        nl = min(lanes, stop - s)
+        _load_chunk(W, coef_t, s, nl)
+        _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p, ka, kb, kw, exponent)
+        for j in range(nl):
+            total = W[_R_COST * LANES + j]
+            res[s + j] = total if (W[_R_BAD * LANES + j] == 0.0 and np.isfinite(total)) else np.inf
+        s += nl
+
+
 @numba.njit(cache=True)
-def _chunk_outputs(W, nl, idx, start, n_real, out, v_a, v_b, linear, h, inv_p):
+def _chunk_outputs(W, nl, rows, start, n_real, out, v_a, v_b, linear, h, inv_p):
     """Write i_a, i_b and mechanical speed of the lanes of ``W`` into ``out`` (rows
-    ``idx[start + j]``; padding lanes past ``n_real`` are not written) until each diverges."""
+    ``rows[start + j]``; padding lanes past ``n_real`` are not written) until each diverges."""
     L = LANES
     n = v_a.shape[0]
     nw = min(nl, n_real - start)
     for k in range(n):
         for j in range(nw):
             if W[_R_BAD * L + j] == 0.0:
-                m = idx[start + j]
+                m = rows[start + j]
                 out[m, 0, k] = W[_R_IA * L + j]
                 out[m, 1, k] = W[_R_IB * L + j]
                 out[m, 2, k] = W[_R_W * L + j] * inv_p
@@ -233,62 +257,86 @@ def _chunk_outputs(W, nl, idx, start, n_real, out, v_a, v_b, linear, h, inv_p):
             break
 
 
-@numba.njit(cache=True)
-def _plan(coef, n_blocks):
-    """Candidates to simulate and their split into blocks.
+@numba.njit(cache=True, nogil=True)
+def _outputs_block(start, stop, coef_t, lanes, rows, n_real, out, v_a, v_b, linear, h, inv_p):
+    """Outputs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``out[rows[.]]``."""
+    W = np.empty(_N_ROWS * LANES)
+    s = start
+    while s < stop:
+        nl = min(lanes, stop - s)
+        _load_chunk(W, coef_t, s, nl)
+        _chunk_outputs(W, nl, rows, s, n_real, out, v_a, v_b, linear, h, inv_p)
+        s += nl
 
-    Returns ``idx`` (valid rows of ``coef``, padded by repeating the last one so that the count
-    is a multiple of :data:`VECTOR`, unless only one lane would be left over), the number of
-    real entries, and ``bounds`` (n_blocks + 1 offsets into ``idx``, block sizes in multiples of
-    :data:`VECTOR` and as equal as possible)."""
-    n_pop = coef.shape[0]
-    n_real = 0
-    for m in range(n_pop):
-        if np.isfinite(coef[m, 0]):
-            n_real += 1
+
+# -- population plan and threads ---------------------------------------------------------------------
+def _plan(coef: np.ndarray, n_blocks: int):
+    """Candidates to simulate and their split into parallel blocks.
+
+    Returns ``rows`` (the valid rows of ``coef``, i.e. with a finite first coefficient),
+    ``coef_t`` (their coefficients transposed, (N_COEF, n_pad): padded by repeating the last
+    valid row so that the count is a multiple of :data:`VECTOR`, unless only one lane would
+    be left over, which is then cheaper to run alone), ``rows_padded`` and the block bounds
+    (offsets into the columns: block sizes in multiples of :data:`VECTOR`, as equal as possible)."""
+    rows = np.flatnonzero(np.isfinite(coef[:, 0]))
+    n_real = len(rows)
     rem = n_real % VECTOR
     n_pad = n_real if rem <= 1 else n_real + VECTOR - rem
-    idx = np.empty(n_pad, dtype=np.int64)
-    q = 0
-    for m in range(n_pop):
-        if np.isfinite(coef[m, 0]):
-            idx[q] = m
-            q += 1
-    for q in range(n_real, n_pad):
-        idx[q] = idx[n_real - 1]
-    n_vec = (n_pad + VECTOR - 1) // VECTOR
-    nb = max(1, min(n_blocks, n_vec))
-    bounds = np.empty(nb + 1, dtype=np.int64)
-    for b in range(nb + 1):
-        bounds[b] = min(n_pad, (b * n_vec // nb) * VECTOR)
-    return idx, n_real, bounds
+    rows_padded = np.concatenate([rows, np.full(n_pad - n_real, rows[-1] if n_real else 0, dtype=rows.dtype)])
+    coef_t = np.ascontiguousarray(coef[rows_padded].T)
+    n_vec = -(-n_pad // VECTOR)
+    nb = max(1, min(int(n_blocks), n_vec))
+    bounds = [min(n_pad, (b * n_vec // nb) * VECTOR) for b in range(nb + 1)]
+    return rows, coef_t, rows_padded, bounds
 
 
-@numba.njit(cache=True, parallel=True)
+_pool_state: dict = {"pool": None, "pid": None, "workers": 0}
+_pool_lock = threading.Lock()
+
+
+def _executor(workers: int) -> ThreadPoolExecutor:
+    """A process-wide thread pool (recreated after a fork or when more workers are needed)."""
+    with _pool_lock:
+        st = _pool_state
+        if st["pool"] is None or st["pid"] != os.getpid() or st["workers"] < workers:
+            st.update(pool=ThreadPoolExecutor(max_workers=workers, thread_name_prefix="imbench-sim"),
+                      pid=os.getpid(), workers=workers)
+        return st["pool"]
+
+
+def _run_blocks(block_fn, bounds, *args) -> None:
+    """Run ``block_fn(start, stop, *args)`` for every block, in parallel (the compiled block
+    functions release the GIL); the calling thread takes the first block."""
+    nb = len(bounds) - 1
+    if nb <= 0:
+        return
+    futures = []
+    if nb > 1:
+        pool = _executor(nb - 1)
+        futures = [pool.submit(block_fn, bounds[b], bounds[b + 1], *args) for b in range(1, nb)]
+    try:
+        block_fn(bounds[0], bounds[1], *args)
+    finally:
+        for f in futures:
+            f.result()
+
+
 def _cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, weights, exponent, lanes,
                 n_blocks):
     """:func:`startup_cost_batch` with the chunk width (``1 <= lanes <= LANES``) and the number
-    of parallel blocks given (results do not depend on either)."""
-    n_pop = coef.shape[0]
-    out = np.full(n_pop, np.inf)
-    if n_pop == 0:
+    of parallel blocks given (the result depends on neither)."""
+    if not 1 <= lanes <= LANES:
+        raise ValueError(f"lanes must be in [1, {LANES}], got {lanes}")
+    coef = np.asarray(coef, dtype=float)
+    out = np.full(coef.shape[0], np.inf)
+    if coef.shape[0] == 0:
         return out
-    idx, n_real, bounds = _plan(coef, n_blocks)
-    inv_p = 1.0 / p
-    ka, kb, kw = weights[0], weights[1], weights[2]
-    for b in numba.prange(bounds.shape[0] - 1):
-        W = np.empty(_N_ROWS * LANES)
-        start = bounds[b]
-        while start < bounds[b + 1]:
-            nl = min(lanes, bounds[b + 1] - start)
-            _load_chunk(W, coef, idx, start, nl)
-            _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p, ka, kb, kw,
-                        exponent)
-            for j in range(min(nl, n_real - start)):
-                total = W[_R_COST * LANES + j]
-                if W[_R_BAD * LANES + j] == 0.0 and np.isfinite(total):
-                    out[idx[start + j]] = total
-            start += nl
+    rows, coef_t, _, bounds = _plan(coef, n_blocks)
+    res = np.empty(coef_t.shape[1])
+    _run_blocks(_cost_block, bounds, coef_t, int(lanes), res, v_a, v_b, bool(linear), float(h), i_a_meas,
+                i_b_meas, speed_meas, 1.0 / p, float(weights[0]), float(weights[1]), float(weights[2]),
+                int(exponent))
+    out[rows] = res[:len(rows)]
     return out
 
 
@@ -300,38 +348,31 @@ def startup_cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas
     ``*_meas``: measured currents (A) and mechanical speed (rad/s) at the same instants.
     ``weights``: (ka, kb, kw). ``exponent``: 2 (eq. 14, squares) or 1 (eq. 15, absolute).
     The simulation starts from rest with zero flux at the first sample. Returns (n_pop,),
-    ``+inf`` for invalid or diverging candidates. Parallel over the threads numba is set to use
-    (``numba.set_num_threads``); the result does not depend on their number.
+    ``+inf`` for invalid or diverging candidates. Runs on as many threads as numba is set to
+    use (``numba.set_num_threads``); the result does not depend on their number.
     """
     return _cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, weights, exponent, LANES,
                        numba.get_num_threads())
 
 
-@numba.njit(cache=True, parallel=True)
 def _outputs_batch(coef, v_a, v_b, linear, h, p, lanes, n_blocks):
     """:func:`startup_outputs_batch` with the chunk width and number of blocks given."""
-    n_pop = coef.shape[0]
-    n = v_a.shape[0]
-    out = np.full((n_pop, 3, n), np.nan)
-    if n_pop == 0:
+    if not 1 <= lanes <= LANES:
+        raise ValueError(f"lanes must be in [1, {LANES}], got {lanes}")
+    coef = np.asarray(coef, dtype=float)
+    out = np.full((coef.shape[0], 3, v_a.shape[0]), np.nan)
+    if coef.shape[0] == 0:
         return out
-    idx, n_real, bounds = _plan(coef, n_blocks)
-    inv_p = 1.0 / p
-    for b in numba.prange(bounds.shape[0] - 1):
-        W = np.empty(_N_ROWS * LANES)
-        start = bounds[b]
-        while start < bounds[b + 1]:
-            nl = min(lanes, bounds[b + 1] - start)
-            _load_chunk(W, coef, idx, start, nl)
-            _chunk_outputs(W, nl, idx, start, n_real, out, v_a, v_b, linear, h, inv_p)
-            start += nl
+    rows, coef_t, rows_padded, bounds = _plan(coef, n_blocks)
+    _run_blocks(_outputs_block, bounds, coef_t, int(lanes), rows_padded, len(rows), out, v_a, v_b,
+                bool(linear), float(h), 1.0 / p)
     return out
 
 
 def startup_outputs_batch(coef, v_a, v_b, linear, h, p):
     """Simulated outputs for a population: (n_pop, 3, N) = i_a (A), i_b (A), mechanical speed
     (rad/s) at the N sample instants, from rest. Diverged candidates are NaN from the sample
-    where they diverge."""
+    where they diverge. Threads as for :func:`startup_cost_batch`."""
     return _outputs_batch(coef, v_a, v_b, linear, h, p, LANES, numba.get_num_threads())
 
 
