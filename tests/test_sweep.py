@@ -72,8 +72,14 @@ def probe(tmp_path_factory):
 
 
 def multirun(args, env, timeout=240) -> subprocess.CompletedProcess:
-    proc = subprocess.run([sys.executable, "-m", "benchmark", "-m", *args], cwd=REPO, env=env,
-                          capture_output=True, text=True, timeout=timeout)
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmark", "-m", *args],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     return proc
 
@@ -102,8 +108,16 @@ def alone(overrides) -> dict:
 def test_joblib_sweep_parallel_failure_recorded_and_bit_identical(probe, tmp_path):
     conf_dir, env = probe
     sweep = tmp_path / "sweep"
-    multirun([f"hydra.searchpath=[file://{conf_dir}]", "optimizer=deap,probe_fail", "seed=0,1",
-              f"budget={BUDGET}", f"hydra.sweep.dir={sweep}"], env)
+    multirun(
+        [
+            f"hydra.searchpath=[file://{conf_dir}]",
+            "optimizer=deap,probe_fail",
+            "seed=0,1",
+            f"budget={BUDGET}",
+            f"hydra.sweep.dir={sweep}",
+        ],
+        env,
+    )
     runs = results(sweep)
     assert sorted(runs) == [("deap", 0), ("deap", 1), ("probe_fail", 0), ("probe_fail", 1)]
 
@@ -143,8 +157,17 @@ def test_submitit_local_sweep(probe, tmp_path):
     process by submitit, as it would be on a SLURM node."""
     _, env = probe
     sweep = tmp_path / "sweep"
-    multirun(["hydra/launcher=submitit_local", "hydra.launcher.timeout_min=5", "optimizer=scipy_de",
-              "seed=0,1", "budget=200", f"hydra.sweep.dir={sweep}"], env)
+    multirun(
+        [
+            "hydra/launcher=submitit_local",
+            "hydra.launcher.timeout_min=5",
+            "optimizer=scipy_de",
+            "seed=0,1",
+            "budget=200",
+            f"hydra.sweep.dir={sweep}",
+        ],
+        env,
+    )
     runs = results(sweep)
     assert sorted(runs) == [("scipy_de", 0), ("scipy_de", 1)]
     assert (sweep / ".submitit").is_dir()
@@ -163,20 +186,41 @@ def test_slurm_launcher_writes_the_sbatch_script(probe, tmp_path):
     fakebin = tmp_path / "bin"
     fakebin.mkdir()
     (fakebin / "sbatch").write_text(
-        '#!/bin/sh\ncp "$1" "$FAKE_SBATCH_OUT"\necho "sbatch: refused (test)" >&2\nexit 1\n')
+        '#!/bin/sh\ncp "$1" "$FAKE_SBATCH_OUT"\necho "sbatch: refused (test)" >&2\nexit 1\n'
+    )
     (fakebin / "srun").write_text("#!/bin/sh\nexit 1\n")  # submitit only checks that srun exists
     for f in fakebin.iterdir():
         f.chmod(0o755)
     script = tmp_path / "submitted.sh"
     env = dict(env, PATH=f"{fakebin}{os.pathsep}{env['PATH']}", FAKE_SBATCH_OUT=str(script))
     proc = subprocess.run(
-        [sys.executable, "-m", "benchmark", "-m", "hydra/launcher=imbench_slurm",
-         "hydra.launcher.partition=short", "hydra.launcher.timeout_min=30", "optimizer=scipy_de",
-         "seed=0,1,2", f"hydra.sweep.dir={tmp_path / 'sweep'}"],
-        cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
+        [
+            sys.executable,
+            "-m",
+            "benchmark",
+            "-m",
+            "hydra/launcher=imbench_slurm",
+            "hydra.launcher.partition=short",
+            "hydra.launcher.timeout_min=30",
+            "optimizer=scipy_de",
+            "seed=0,1,2",
+            f"hydra.sweep.dir={tmp_path / 'sweep'}",
+        ],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode != 0 and "sbatch: refused (test)" in proc.stderr
     text = script.read_text()
-    for line in ("#SBATCH --partition=short", "#SBATCH --time=30", "#SBATCH --cpus-per-task=1",
-                 "#SBATCH --mem=2GB", "#SBATCH --array=0-2%3", "#SBATCH --job-name=imbench",
-                 "export NUMBA_NUM_THREADS=1"):
+    for line in (
+        "#SBATCH --partition=short",
+        "#SBATCH --time=30",
+        "#SBATCH --cpus-per-task=1",
+        "#SBATCH --mem=2GB",
+        "#SBATCH --array=0-2%3",
+        "#SBATCH --job-name=imbench",
+        "export NUMBA_NUM_THREADS=1",
+    ):
         assert line in text, text
