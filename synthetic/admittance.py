@@ -19,6 +19,14 @@ Noise (``cfg.noise.admittance_fraction``): white Gaussian noise of standard devi
 full_scale_admittance`` on G and on B, and ``fraction * full_scale_torque`` on the torque, from
 ``numpy.random.default_rng(noise.seed)``. DC resistances are exact (a four-wire measurement).
 
+Unmodelled effects (``cfg.effects``, ``effect_size``, ``effect_form``; the catalogue of
+:mod:`benchmark.effects.admittance`): with ``effects`` named, the data hold exactly those effects on the
+preset's bare 6-parameter machine (its ``R1sigma``, ``R2sigma``, ``X3`` and its warming, which are catalogue
+effects themselves, are removed first); ``effects=[none]`` is the bare machine. The sweep is then computed on
+the generalised circuit :class:`benchmark.effects.admittance.SweepCircuit` (torque from the air-gap power),
+and ``temperature_drift`` turns the warming on with the heating scale set to give its temperature rise.
+Without ``effects`` the preset is used as it is (Lindsay and Barton's model F, warming on).
+
 ``truth.yaml`` holds the parameters at the reference temperature, the temperatures, the noise, and the
 injected effects with their sizes.
 """
@@ -106,6 +114,94 @@ def _schedule(test, voltages):
     return segs, reads, t
 
 
+def _effects_plant(cfg, params, test, thermal_cfg, voltages, f, p) -> dict | None:
+    """The plant with the unmodelled effects of ``cfg.effects`` injected (the hook of
+    :mod:`benchmark.effects.admittance`), or None when no effect is named.
+
+    With ``effects`` given, the data hold exactly the named effects: the preset's own catalogue
+    terms (``R1sigma``, ``R2sigma``, ``X3``: ``leakage_core_loss``, ``leakage_saturation``; the
+    warming: ``temperature_drift``) are removed first, leaving the 6-parameter machine, and
+    each named effect is added at ``effect_size[name]`` (default: the geometric middle of its
+    realistic range) with ``effect_form[name]`` varying its form. ``effects=[none]`` is the bare
+    6-parameter machine without warming."""
+    from benchmark.effects import load_effects
+    from benchmark.effects.admittance import SweepCircuit, SweepContext
+
+    names = [str(n) for n in (_sel(cfg, "effects", []) or [])]
+    if not names:
+        return None
+    names = [n for n in names if n != "none"]
+    sizes = _sel(cfg, "effect_size", {}) or {}
+    forms = _sel(cfg, "effect_form", {}) or {}
+    sizes = OmegaConf.to_container(sizes) if OmegaConf.is_config(sizes) else dict(sizes)
+    forms = OmegaConf.to_container(forms) if OmegaConf.is_config(forms) else dict(forms)
+    unknown = sorted(set(sizes) - set(names)) + sorted(set(forms) - set(names))
+    if unknown:
+        raise ConfigError(f"effect_size/effect_form: {unknown} not among effects={names}")
+    catalogue = load_effects("admittance", names=names) if names else {}
+    bare = CircuitParameters(**(params.to_dict() | {"R1sigma": 0.0, "R2sigma": 0.0, "X3": 0.0}))
+    test = dict(test) | {"warming": False}
+    thermal_cfg = dict(thermal_cfg)
+    # the sweep's own scales: no-load air-gap voltage and standstill current at the top level
+    V_top = max(voltages)
+    op0 = operating_point(bare, np.array([0.0, 1.0]), V_top, f, p)
+    E_top = float(np.abs(V_top - op0.I1[0] * complex(bare.R1_total, bare.X1)))
+    ctx = SweepContext(E_top=E_top, I_stall=float(np.abs(op0.I1[1])), frequency=f)
+    circuit = SweepCircuit.from_parameters(bare.to_dict())
+    injected, target_rise = [], None
+    for name in names:
+        eff = catalogue[name]
+        lo, hi = eff.realistic
+        size = float(sizes.get(name, np.sqrt(lo * hi)))
+        form = eff.form_of(forms.get(name))
+        try:
+            circuit = eff.plant(circuit, size, ctx, form)
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from None
+        session = eff.session(size, form)
+        if session.get("warming"):
+            test["warming"] = True
+            target_rise = session["target_rise_K"]
+            if not session.get("cooling", True):
+                thermal_cfg |= {"conductance_standstill": 0.0, "conductance_at_speed": 0.0}
+        injected.append(
+            {"name": name, "size": size, "size_name": eff.size_name, "unit": eff.size_unit, "form": form}
+        )
+    return {
+        "params": bare,
+        "test": test,
+        "thermal": thermal_cfg,
+        "circuit": circuit,
+        "injected": injected,
+        "target_rise_K": target_rise,
+        "scales": {"E_top_V": E_top, "I_stall_A": ctx.I_stall},
+    }
+
+
+def _thermal_for_rise(
+    session_temperatures, thermal: ThermalModel, theta0: float, rise: float
+) -> ThermalModel:
+    """The thermal model with its capacitance scaled so that the winding temperature rises by
+    ``rise`` K from the first reading to the hottest (secant steps on the heating scale 1/C)."""
+    from dataclasses import replace
+
+    def achieved(th):
+        theta, _ = session_temperatures(th)
+        return float(theta.max() - theta[0])
+
+    h, r = 1.0 / thermal.capacitance, achieved(thermal)
+    for _ in range(3):
+        if r <= 0:
+            break
+        h_new = h * rise / r
+        thermal = replace(thermal, capacitance=1.0 / h_new)
+        r_new = achieved(thermal)
+        h, r = h_new, r_new
+        if abs(r - rise) <= 1e-3 * rise:
+            break
+    return thermal
+
+
 def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     """The sweep data set and its truth document for the composed config (motor preset + noise)."""
     params = parameters_from_config(cfg)
@@ -137,6 +233,9 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
 
     th = _sel(cfg, "motor.thermal", {})
     th = OmegaConf.to_container(th) if OmegaConf.is_config(th) else dict(th)
+    plant = _effects_plant(cfg, params, test, th, voltages, f, p)
+    if plant is not None:
+        params, test, th = plant["params"], plant["test"], plant["thermal"]
     warming = bool(test["warming"])
     if warming:
         try:
@@ -161,7 +260,7 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     t_after = t_end + float(test["dc_after_delay_s"])
 
     # temperature along the session: exact exponential steps, losses at the step midpoint
-    if warming:
+    def session_temperatures(thermal):
         grid = [0.0]
         for t0, t1, *_ in segs:
             m = max(1, int(np.ceil((t1 - t0) / FINE_STEP_S)))
@@ -185,8 +284,12 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
                 )
                 P = float(op.P_in - op.P_mech)
             theta[i + 1] = thermal.step(theta[i], P, n, grid[i + 1] - grid[i])
-        theta_read = np.interp(t_read, grid, theta)
-        theta_after = float(np.interp(t_after, grid, theta))
+        return np.interp(t_read, grid, theta), float(np.interp(t_after, grid, theta))
+
+    if warming:
+        if plant is not None and plant["target_rise_K"] is not None:
+            thermal = _thermal_for_rise(session_temperatures, thermal, theta0, plant["target_rise_K"])
+        theta_read, theta_after = session_temperatures(thermal)
     else:
         theta_read = np.full(len(t_read), theta0)
         theta_after = theta0
@@ -194,8 +297,12 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     s = slip_from_speed(n_read, f, p)
     k = copper_factor(theta_read, theta_ref)
     warm = CircuitParameters(**(params.to_dict() | {"R1": params.R1 * k, "R2": params.R2 * k}))
-    op = operating_point(warm, s, v_read, f, p)
-    Y, T = op.Y, op.torque
+    if plant is None:
+        op = operating_point(warm, s, v_read, f, p)
+        Y, T = op.Y, op.torque
+    else:
+        Y, E, _, I2 = plant["circuit"].with_(copper=k).solve(s, v_read)
+        T = 3.0 * np.real(E * np.conj(I2)) / (2.0 * np.pi * f / p)
     fs = test["full_scale_admittance"]
     fs = float(fs) if fs is not None else nice_ceiling(float(np.max(np.abs(Y))))
     fs_T = nice_ceiling(float(np.max(np.abs(T))))
@@ -265,9 +372,13 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
             "temperature_drift": {"rise_C": float(theta_read.max() - theta0)} if warming else None,
             "leakage_core_loss": {"R1sigma": params.R1sigma, "R2sigma": params.R2sigma},
             "leakage_saturation": {"X3": params.X3},
-        },
+        }
+        if plant is None
+        else plant["injected"],
         "synchronous_speed_rpm": synchronous_speed_rpm(f, p),
     }
+    if plant is not None:
+        truth["effect_scales"] = plant["scales"]
     return data, truth
 
 
