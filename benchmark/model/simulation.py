@@ -1,9 +1,11 @@
 """Compiled simulation of the induction-motor model: classical RK4 at the sample time.
 
-The stepper integrates :func:`benchmark.model.motor.state_derivative`. The input voltage is
-given at the sample instants; between samples it is either held (``zoh``, switch-state
-voltages: the same voltage at all four RK4 stages) or interpolated linearly (``linear``,
-sampled continuous voltages: stage voltages at ``t_k``, the midpoint and ``t_(k+1)``).
+The stepper integrates the equations of :func:`benchmark.model.motor.state_derivative`
+(through :func:`_derivative_lane`: the same operations with the friction cases written as
+selects, one source for the one-candidate plant and the SIMD lanes). The input voltage is given
+at the sample instants; between samples it is either held (``zoh``, switch-state voltages: the
+same voltage at all four RK4 stages) or interpolated linearly (``linear``, sampled continuous
+voltages: stage voltages at ``t_k``, the midpoint and ``t_(k+1)``).
 
 Populations (:func:`startup_cost_batch`, :func:`startup_outputs_batch`)
 -----------------------------------------------------------------------
@@ -40,7 +42,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numba
 import numpy as np
 
-from benchmark.model.motor import N_COEF, state_derivative
+from benchmark.model.motor import N_COEF
 
 #: Any state beyond this magnitude counts as a diverged simulation.
 DIVERGENCE_LIMIT = 1e9
@@ -58,39 +60,7 @@ _N_ROWS = N_COEF + 7
 _ALIVE_CHECK = 64
 
 
-# -- one candidate: the reference step (also the plant of simulate_states) ------------------------
-@numba.njit(cache=True)
-def _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, h):
-    d = 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
-    k1 = state_derivative(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, d)
-    hh = 0.5 * h
-    k2 = state_derivative(
-        c, i_a + hh * k1[0], i_b + hh * k1[1], psi_a + hh * k1[2], psi_b + hh * k1[3],
-        w + hh * k1[4], vam, vbm, d,
-    )
-    k3 = state_derivative(
-        c, i_a + hh * k2[0], i_b + hh * k2[1], psi_a + hh * k2[2], psi_b + hh * k2[3],
-        w + hh * k2[4], vam, vbm, d,
-    )
-    k4 = state_derivative(
-        c, i_a + h * k3[0], i_b + h * k3[1], psi_a + h * k3[2], psi_b + h * k3[3],
-        w + h * k3[4], va1, vb1, d,
-    )
-    h6 = h / 6.0
-    n_ia = i_a + h6 * (k1[0] + 2.0 * (k2[0] + k3[0]) + k4[0])
-    n_ib = i_b + h6 * (k1[1] + 2.0 * (k2[1] + k3[1]) + k4[1])
-    n_pa = psi_a + h6 * (k1[2] + 2.0 * (k2[2] + k3[2]) + k4[2])
-    n_pb = psi_b + h6 * (k1[3] + 2.0 * (k2[3] + k3[3]) + k4[3])
-    n_w = w + h6 * (k1[4] + 2.0 * (k2[4] + k3[4]) + k4[4])
-    # Coulomb friction cannot reverse the rotor: a sign change it would cause is a stop.
-    fc = c[9]
-    if fc > 0.0 and w != 0.0 and n_w * w <= 0.0:
-        t_m = c[6] * (n_pa * n_ib - n_pb * n_ia)
-        if abs(t_m) <= fc:
-            n_w = 0.0
-    return n_ia, n_ib, n_pa, n_pb, n_w
-
-
+# -- the step: one candidate (the plant of simulate_states) and branch-free lanes of a chunk ---------
 @numba.njit(cache=True)
 def _stage_voltages(v_a, v_b, k, linear):
     va0, vb0 = v_a[k], v_b[k]
@@ -100,7 +70,6 @@ def _stage_voltages(v_a, v_b, k, linear):
     return va0, vb0, va0, vb0, va0, vb0
 
 
-# -- many candidates: branch-free lanes of a chunk -------------------------------------------------
 @numba.njit(cache=True)
 def _derivative_lane(a11, a13, c1, c2, a31, a33, kt, inv_tau, b_m, fc,
                      i_a, i_b, psi_a, psi_b, w, v_a, v_b, d):
@@ -118,6 +87,38 @@ def _derivative_lane(a11, a13, c1, c2, a31, a33, kt, inv_tau, b_m, fc,
     dw = -w * inv_tau + b_m * (t_m - fc * s)
     dw = dw if s != 0.0 else 0.0
     return di_a, di_b, dpsi_a, dpsi_b, dw
+
+
+@numba.njit(cache=True)
+def _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, h):
+    """One RK4 step of one candidate (coefficient row ``c``): the reference plant's step.
+
+    The derivative is :func:`_derivative_lane`, operation for operation
+    :func:`benchmark.model.motor.state_derivative` (``tests/test_simulation_fast.py`` checks the
+    trajectories bit for bit against a stepper built on ``state_derivative``); it is used here
+    because it compiles in a fraction of the time of the ``inline="always"`` original."""
+    a11, a13, c1, c2, a31, a33, kt, it, bm, fc = c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9]
+    d = 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
+    k1 = _derivative_lane(a11, a13, c1, c2, a31, a33, kt, it, bm, fc, i_a, i_b, psi_a, psi_b, w, va0, vb0, d)
+    hh = 0.5 * h
+    k2 = _derivative_lane(a11, a13, c1, c2, a31, a33, kt, it, bm, fc, i_a + hh * k1[0], i_b + hh * k1[1],
+                          psi_a + hh * k1[2], psi_b + hh * k1[3], w + hh * k1[4], vam, vbm, d)
+    k3 = _derivative_lane(a11, a13, c1, c2, a31, a33, kt, it, bm, fc, i_a + hh * k2[0], i_b + hh * k2[1],
+                          psi_a + hh * k2[2], psi_b + hh * k2[3], w + hh * k2[4], vam, vbm, d)
+    k4 = _derivative_lane(a11, a13, c1, c2, a31, a33, kt, it, bm, fc, i_a + h * k3[0], i_b + h * k3[1],
+                          psi_a + h * k3[2], psi_b + h * k3[3], w + h * k3[4], va1, vb1, d)
+    h6 = h / 6.0
+    n_ia = i_a + h6 * (k1[0] + 2.0 * (k2[0] + k3[0]) + k4[0])
+    n_ib = i_b + h6 * (k1[1] + 2.0 * (k2[1] + k3[1]) + k4[1])
+    n_pa = psi_a + h6 * (k1[2] + 2.0 * (k2[2] + k3[2]) + k4[2])
+    n_pb = psi_b + h6 * (k1[3] + 2.0 * (k2[3] + k3[3]) + k4[3])
+    n_w = w + h6 * (k1[4] + 2.0 * (k2[4] + k3[4]) + k4[4])
+    # Coulomb friction cannot reverse the rotor: a sign change it would cause is a stop.
+    if fc > 0.0 and w != 0.0 and n_w * w <= 0.0:
+        t_m = kt * (n_pa * n_ib - n_pb * n_ia)
+        if abs(t_m) <= fc:
+            n_w = 0.0
+    return n_ia, n_ib, n_pa, n_pb, n_w
 
 
 @numba.njit(cache=True)
@@ -183,7 +184,8 @@ def _all_diverged(W, nl):
 def _load_chunk(W, coef_t, start, nl):
     """Fill work buffer ``W`` with columns ``start..start+nl-1`` of the transposed coefficients
     ``coef_t`` (N_COEF, n); states, cost and flags zero."""
-    W[:] = 0.0
+    for q in range(W.shape[0]):
+        W[q] = 0.0
     for r in range(N_COEF):
         for j in range(nl):
             W[r * LANES + j] = coef_t[r, start + j]
@@ -219,11 +221,10 @@ def _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_
 
 
 @numba.njit(cache=True, nogil=True)
-def _cost_block(start, stop, coef_t, lanes, res, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p,
-                ka, kb, kw, exponent):
+def _cost_block(start, stop, W, coef_t, lanes, res, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas,
+                inv_p, ka, kb, kw, exponent):
     """Costs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``res[start:stop]``,
-    ``lanes`` at a time (+inf where diverged). Releases the GIL."""
-    W = np.empty(_N_ROWS * LANES)
+    ``lanes`` at a time (+inf where diverged), using the work buffer ``W``. Releases the GIL."""
     s = start
     while s < stop:
         nl = min(lanes, stop - s)
@@ -231,7 +232,7 @@ def _cost_block(start, stop, coef_t, lanes, res, v_a, v_b, linear, h, i_a_meas, 
         _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p, ka, kb, kw, exponent)
         for j in range(nl):
             total = W[_R_COST * LANES + j]
-            res[s + j] = total if (W[_R_BAD * LANES + j] == 0.0 and np.isfinite(total)) else np.inf
+            res[s + j] = total if (W[_R_BAD * LANES + j] == 0.0 and abs(total) < np.inf) else np.inf
         s += nl
 
 
@@ -258,9 +259,8 @@ def _chunk_outputs(W, nl, rows, start, n_real, out, v_a, v_b, linear, h, inv_p):
 
 
 @numba.njit(cache=True, nogil=True)
-def _outputs_block(start, stop, coef_t, lanes, rows, n_real, out, v_a, v_b, linear, h, inv_p):
+def _outputs_block(start, stop, W, coef_t, lanes, rows, n_real, out, v_a, v_b, linear, h, inv_p):
     """Outputs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``out[rows[.]]``."""
-    W = np.empty(_N_ROWS * LANES)
     s = start
     while s < stop:
         nl = min(lanes, stop - s)
@@ -305,17 +305,18 @@ def _executor(workers: int) -> ThreadPoolExecutor:
 
 
 def _run_blocks(block_fn, bounds, *args) -> None:
-    """Run ``block_fn(start, stop, *args)`` for every block, in parallel (the compiled block
-    functions release the GIL); the calling thread takes the first block."""
+    """Run ``block_fn(start, stop, W, *args)`` for every block with its own work buffer ``W``, in
+    parallel (the compiled block functions release the GIL); the calling thread takes the first."""
     nb = len(bounds) - 1
     if nb <= 0:
         return
     futures = []
     if nb > 1:
         pool = _executor(nb - 1)
-        futures = [pool.submit(block_fn, bounds[b], bounds[b + 1], *args) for b in range(1, nb)]
+        futures = [pool.submit(block_fn, bounds[b], bounds[b + 1], np.empty(_N_ROWS * LANES), *args)
+                   for b in range(1, nb)]
     try:
-        block_fn(bounds[0], bounds[1], *args)
+        block_fn(bounds[0], bounds[1], np.empty(_N_ROWS * LANES), *args)
     finally:
         for f in futures:
             f.result()
