@@ -24,3 +24,32 @@ class DataError(UserError):
 
 class ConfigError(UserError):
     """A configuration value is invalid. The message starts with the config key."""
+
+
+class ResumeError(UserError):
+    """A run cannot be resumed from its checkpoint (another configuration wrote it, or it is
+    unreadable). The message says what differs and how to start afresh."""
+
+
+class ImbenchWarning(UserWarning):
+    """Base class of the warnings the command line prints as one ``warning: ...`` line."""
+
+
+class ResumeWarning(ImbenchWarning):
+    """A resumed run could not replay its whole checkpoint (a non-deterministic plugin) or had
+    nothing to resume."""
+
+
+class DataWarning(ImbenchWarning):
+    """Data that load but look wrong (e.g. a speed column that may be in rpm, an unknown
+    ``meta.yaml`` key). The command line prints it as one ``warning: ...`` line and the run
+    records it in ``result.json``."""
+
+    @classmethod
+    def at(cls, path, message: str, column: str | None = None, row: int | None = None) -> DataWarning:
+        where = str(path)
+        if column is not None:
+            where += f", column '{column}'"
+        if row is not None:
+            where += f", row {row}"
+        return cls(f"{where}: {message}")

@@ -8,12 +8,16 @@ problem, ``cfg.optimizer.plugin`` the optimiser. The harness counts evaluations 
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import importlib
+import inspect
 import json
 import math
 import platform
 import sys
 import time
-import traceback
+import warnings
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -22,12 +26,26 @@ import numpy as np
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from benchmark.data.tables import write_table_atomic, write_text_atomic
-from benchmark.errors import ConfigError, UserError
+from benchmark.data.tables import table_size_limit, write_table_atomic, write_text_atomic
+from benchmark.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.polish import polish_least_squares
-from benchmark.problem import BudgetedProblem, OptimizeResult, Problem, Status, run_plugin
+from benchmark.problem import (
+    BudgetedProblem,
+    EvaluationJournal,
+    OptimizeResult,
+    Problem,
+    Status,
+    run_plugin,
+)
 
-RECORDED_PACKAGES = ("numpy", "scipy", "numba", "pandas", "hydra-core", "deap", "pygad", "nlopt", "cma", "imbench")
+#: The checkpoint of a run in progress (see :class:`benchmark.problem.EvaluationJournal`);
+#: removed once ``result.json`` is written.
+JOURNAL_NAME = "journal.bin"
+#: Config keys that do not change a run's trajectory (left out of its fingerprint).
+VOLATILE_KEYS = ("resume", "checkpoint", "time_limit_s", "progress")
+
+RECORDED_PACKAGES = ("numpy", "scipy", "numba", "pandas", "hydra-core", "deap", "pygad", "nlopt", "cma",
+                     "imbench")
 
 
 @dataclass
@@ -50,13 +68,16 @@ def resolve_budget(cfg: DictConfig) -> int:
 
 
 def validate_config(cfg: DictConfig) -> None:
-    """Catch configuration mistakes before any work starts."""
+    """Catch configuration mistakes before any work starts (no data read, nothing simulated):
+    groups present, seed, budget, polish, time limit, checkpoint keys, the shape of
+    ``bounds``, the problem's own checks (``check_config`` in the module of its set-up
+    function) and the optimiser plugin (importable, options it accepts)."""
     for key in ("problem", "optimizer", "motor"):
         if key not in cfg or cfg[key] is None:
             raise ConfigError(f"{key}: missing config group")
     if "plugin" not in cfg.optimizer or "_target_" not in cfg.optimizer.plugin:
         raise ConfigError("optimizer.plugin._target_: the optimiser config must name its plugin function")
-    if "setup" not in cfg.problem:
+    if "setup" not in cfg.problem or "_target_" not in cfg.problem.setup:
         raise ConfigError("problem.setup._target_: the problem config must name its set-up function")
     seed = cfg.get("seed")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
@@ -66,6 +87,72 @@ def validate_config(cfg: DictConfig) -> None:
         pb = cfg.get("polish_budget")
         if isinstance(pb, bool) or not isinstance(pb, int) or pb < 1:
             raise ConfigError(f"polish_budget: must be a positive whole number, got {pb!r}")
+    limit = cfg.get("time_limit_s")
+    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
+                              or not math.isfinite(limit) or limit <= 0):
+        raise ConfigError(f"time_limit_s: must be a positive number of seconds or null, got {limit!r}")
+    for key in ("resume", "checkpoint", "polish"):
+        v = cfg.get(key)
+        if v is not None and not isinstance(v, bool):
+            raise ConfigError(f"{key}: must be true or false, got {v!r}")
+    if cfg.get("resume") and cfg.get("checkpoint") is False:
+        raise ConfigError("resume: needs checkpoint=true (a run without checkpoints cannot be resumed)")
+    data = cfg.get("data")
+    mib = data.get("max_file_mib") if data is not None else None
+    if mib is not None and (isinstance(mib, bool) or not isinstance(mib, (int, float)) or not mib > 0):
+        raise ConfigError(f"data.max_file_mib: must be a positive number of MiB, got {mib!r}")
+    bounds = cfg.get("bounds")
+    if bounds is not None:
+        if not OmegaConf.is_dict(bounds):
+            raise ConfigError(f"bounds: expected a mapping {{name: [low, high]}}, e.g. bounds={{Rs:[1,10]}}, "
+                              f"got {bounds!r}")
+        for k, v in bounds.items():
+            if not OmegaConf.is_list(v) or len(v) != 2:
+                raise ConfigError(f"bounds.{k}: expected [low, high], got {v!r}")
+    check = _problem_check(cfg)
+    if check is not None:
+        check(cfg)
+    check_plugin(cfg)
+
+
+def _problem_check(cfg):
+    """The problem's ``check_config(cfg)``, if the module of its set-up function has one."""
+    target = str(cfg.problem.setup._target_)
+    module_name = target.rpartition(".")[0]
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ConfigError(f"problem.setup._target_: cannot import {module_name!r}: {exc}") from None
+    return getattr(module, "check_config", None)
+
+
+def check_plugin(cfg: DictConfig):
+    """Import the plugin function and check its options against its signature; returns it."""
+    pcfg = cfg.optimizer.plugin
+    target = str(pcfg._target_)
+    module_name, _, attr = target.rpartition(".")
+    try:
+        fn = getattr(importlib.import_module(module_name), attr)
+    except ImportError as exc:
+        raise ConfigError(f"optimizer.plugin._target_: cannot import {module_name!r} for optimizer "
+                          f"{cfg.optimizer.get('name')!r}: {exc}") from None
+    except AttributeError:
+        raise ConfigError(f"optimizer.plugin._target_: {module_name!r} has no function {attr!r}") from None
+    try:
+        sig = inspect.signature(fn)
+    except (TypeError, ValueError):
+        return fn
+    params = sig.parameters
+    if any(p.kind == inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return fn
+    valid = [n for n, p in params.items() if n not in ("problem", "seed")
+             and p.kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+    for key in pcfg:
+        if str(key).startswith("_"):
+            continue
+        if key not in valid:
+            raise ConfigError(f"optimizer.plugin.{key}: not an option of {target}; valid: {valid}")
+    return fn
 
 
 def package_versions() -> dict[str, str]:
@@ -90,29 +177,69 @@ def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[st
 
 
 def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
-    """One identification run, written to ``outdir``."""
+    """One identification run, written to ``outdir``.
+
+    Checkpoints (``checkpoint``, default true): every evaluated batch is journaled to
+    ``outdir/journal.bin`` as it happens. With ``resume=true`` and the same ``outdir``
+    (``hydra.run.dir=...``), the plugin starts again from scratch with the same seed and the
+    journal is replayed: batches identical bit for bit to the journaled ones get the journaled
+    costs without simulating, then the run goes on live, so a deterministic plugin finishes
+    exactly as an uninterrupted run would. A run whose ``result.json`` is already written is
+    not run again on resume (a resumed sweep skips its finished jobs).
+    """
+    outdir = Path(outdir)
     validate_config(cfg)
     budget = resolve_budget(cfg)
     seed = int(cfg.seed)
-    t_start = time.perf_counter()
-    problem: Problem = instantiate(cfg.problem.setup)(cfg)
-    setup_time = time.perf_counter() - t_start
-    plugin = instantiate(cfg.optimizer.plugin)
     name = str(cfg.optimizer.get("name", "optimizer"))
-
-    budgeted = BudgetedProblem(problem, budget)
     try:
-        result = run_plugin(plugin, budgeted, seed=seed, name=name)
-    except UserError:
-        raise
-    except Exception as exc:  # a failing plugin is a failed run, recorded with its reason
-        result = OptimizeResult(
-            x=budgeted.best_x, fun=budgeted.best_cost, nfev=budgeted.nfev, nit=0, status=Status.FAILED,
-            message=f"{type(exc).__name__}: {exc}", optimizer=name, seed=seed, wall_time_s=math.nan,
-        )
-        result_trace = traceback.format_exc()
-    else:
-        result_trace = None
+        plugin = instantiate(cfg.optimizer.plugin)
+    except Exception as exc:  # hydra's InstantiationException: a bad _target_ or option
+        raise ConfigError(f"optimizer.plugin: cannot build the plugin: {exc}") from None
+
+    t_start = time.perf_counter()
+    mib = (cfg.get("data") or {}).get("max_file_mib")
+    with warnings.catch_warnings(record=True) as caught, \
+            table_size_limit(None if mib is None else int(float(mib) * 2**20)):
+        warnings.simplefilter("always")
+        problem: Problem = instantiate(cfg.problem.setup)(cfg)
+    run_warnings = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    for w in caught:  # shown once, after set-up (the command line prints them one line each)
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    setup_time = time.perf_counter() - t_start
+
+    fingerprint = run_fingerprint(cfg, problem)
+    journal, replay, resume_info = None, None, None
+    if cfg.get("resume"):
+        done = _finished_run(outdir, fingerprint)
+        if done is not None:
+            return RunOutcome(problem=problem, result=_result_from_record(done), record=done)
+        replay, resume_info = _read_checkpoint(outdir, fingerprint, problem, cfg)
+        if resume_info.get("note"):
+            warnings.warn(f"resume: {resume_info['note']}", ResumeWarning, stacklevel=2)
+            run_warnings.append(f"resume: {resume_info['note']}")
+    if cfg.get("checkpoint", True):
+        path = outdir / JOURNAL_NAME
+        if replay is not None:
+            journal = EvaluationJournal.reopen(path, replay)
+        else:
+            journal = EvaluationJournal.create(path, _journal_header(cfg, problem, budget, fingerprint))
+
+    budgeted = BudgetedProblem(problem, budget, journal=journal, replay=replay.records if replay else None)
+    try:
+        result = run_plugin(plugin, budgeted, seed=seed, name=name, time_limit_s=cfg.get("time_limit_s"),
+                            record_failures=True)
+    finally:
+        if journal is not None:
+            journal.close()
+    if resume_info is not None:
+        resume_info.update(replayed_batches=budgeted.replayed_batches,
+                           replayed_evaluations=budgeted.replayed_evaluations,
+                           mismatch=budgeted.replay_mismatch)
+        if budgeted.replaying:
+            resume_info["unreplayed_batches"] = len(budgeted._replay)
+        if budgeted.replay_mismatch:
+            run_warnings.append(f"resume: {budgeted.replay_mismatch['message']}")
 
     history = [(e, c, "optimizer") for e, c in zip(budgeted.history.evaluations, budgeted.history.best_cost,
                                                    strict=True)]
@@ -138,7 +265,7 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "evaluations": np.array([h[0] for h in history], dtype=int),
         "best_cost": np.array([h[1] for h in history], dtype=float),
         "phase": np.array([h[2] for h in history], dtype=object),
-    }, float_format="%.10g")
+    }, float_format="%.17g")
     record = {
         "problem": problem.name,
         "optimizer": name,
@@ -158,6 +285,7 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "budget": budget,
         "nit": result.nit,
         "polish": polish_info,
+        "time_limit_s": cfg.get("time_limit_s"),
         "wall_time_s": wall,
         "wall_time_optimizer_s": result.wall_time_s,
         "setup_time_s": setup_time,
@@ -165,14 +293,140 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "bounds": {n: [float(lo), float(hi)] for n, lo, hi in zip(problem.parameter_names, problem.lower,
                                                                  problem.upper, strict=True)},
         "problem_info": problem.describe(),
+        "warnings": run_warnings,
+        "resume": resume_info,
+        "fingerprint": fingerprint,
         "config": OmegaConf.to_container(cfg, resolve=True),
         "versions": package_versions(),
         "command": " ".join(sys.argv),
     }
-    if result_trace:
-        record["traceback"] = result_trace
+    if result.traceback:
+        record["traceback"] = result.traceback
     write_text_atomic(outdir / "result.json", json.dumps(record, indent=2, default=_json_default) + "\n")
+    if journal is not None:  # the result is safe: the checkpoint has served its purpose
+        with contextlib.suppress(OSError):
+            (outdir / JOURNAL_NAME).unlink()
     return RunOutcome(problem=problem, result=result, record=record)
+
+
+# -- checkpoints -------------------------------------------------------------------------------
+def run_fingerprint(cfg: DictConfig, problem: Problem) -> str:
+    """SHA-256 of what determines a run's trajectory: the resolved config (less
+    :data:`VOLATILE_KEYS` and ``data.max_file_mib``), the searched names and bounds, and the
+    contents of the data folder's tables and YAML files."""
+    return hashlib.sha256(json.dumps(_fingerprint_doc(cfg, problem), sort_keys=True, default=str).encode()
+                          ).hexdigest()
+
+
+def _fingerprint_doc(cfg: DictConfig, problem: Problem) -> dict:
+    conf = OmegaConf.to_container(cfg, resolve=True)
+    for k in VOLATILE_KEYS:
+        conf.pop(k, None)
+    if isinstance(conf.get("data"), dict):
+        conf["data"].pop("max_file_mib", None)
+    return {
+        "config": conf,
+        "parameter_names": list(problem.parameter_names),
+        "lower": [float(v).hex() for v in np.asarray(problem.lower, float)],
+        "upper": [float(v).hex() for v in np.asarray(problem.upper, float)],
+        "data": _data_digest((cfg.get("data") or {}).get("path")),
+    }
+
+
+def _data_digest(path) -> str | None:
+    if path is None:
+        return None
+    folder = Path(str(path))
+    h = hashlib.sha256()
+    for f in sorted(folder.iterdir()) if folder.is_dir() else []:
+        if f.is_file() and f.suffix.lower() in (".csv", ".yaml", ".yml"):
+            h.update(f.name.encode() + b"\0")
+            with open(f, "rb") as fh:
+                for chunk in iter(lambda fh=fh: fh.read(1 << 20), b""):
+                    h.update(chunk)
+    return h.hexdigest()
+
+
+def _journal_header(cfg: DictConfig, problem: Problem, budget: int, fingerprint: str) -> dict:
+    return {"fingerprint": fingerprint, "n_var": problem.n_var,
+            "parameter_names": list(problem.parameter_names), "budget": budget,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
+            "config": _fingerprint_doc(cfg, problem)["config"]}
+
+
+def _read_checkpoint(outdir: Path, fingerprint: str, problem: Problem, cfg: DictConfig):
+    """(journal contents or None, resume info) for ``resume=true``; ResumeError if the journal
+    belongs to another configuration."""
+    path = outdir / JOURNAL_NAME
+    contents = EvaluationJournal.read(path)
+    info = {"journal": str(path), "replayed_batches": 0, "replayed_evaluations": 0, "ignored_bytes": 0}
+    if contents is None:
+        info["note"] = (f"no checkpoint in {outdir} (is hydra.run.dir the folder of the interrupted run?): "
+                        "starting from the beginning")
+        return None, info
+    header = contents.header
+    if header.get("fingerprint") != fingerprint:
+        raise ResumeError(
+            f"resume: the checkpoint {path} was written by a different run configuration or data "
+            f"({_config_difference(header.get('config'), _fingerprint_doc(cfg, problem)['config'])}); "
+            "resume with the same overrides "
+            "as the interrupted run, or start afresh with resume=false"
+        )
+    if header.get("n_var") != problem.n_var:
+        raise ResumeError(f"resume: the checkpoint {path} is for {header.get('n_var')} parameters, "
+                          f"this problem has {problem.n_var}")
+    info["ignored_bytes"] = contents.ignored_bytes
+    info["journaled_batches"] = len(contents.records)
+    if contents.ignored_bytes:
+        info["note"] = (f"ignored {contents.ignored_bytes} bytes at the end of the checkpoint (a record cut "
+                        "short when the run was killed)")
+    return contents, info
+
+
+def _config_difference(old, now) -> str:
+    """'seed: 1 then, 2 now; ...' for the first differing config keys."""
+    a, b = _flatten(old or {}), _flatten(now or {})
+    keys = sorted(k for k in set(a) | set(b) if a.get(k, "<unset>") != b.get(k, "<unset>"))
+    if not keys:
+        return "same configuration, but the data files or the derived bounds differ"
+    shown = "; ".join(f"{k}: {a.get(k, '<unset>')!r} then, {b.get(k, '<unset>')!r} now" for k in keys[:5])
+    return shown + (f"; and {len(keys) - 5} more" if len(keys) > 5 else "")
+
+
+def _flatten(d, prefix: str = "") -> dict:
+    out = {}
+    if isinstance(d, dict):
+        for k, v in d.items():
+            out.update(_flatten(v, f"{prefix}{k}."))
+    else:
+        out[prefix[:-1]] = d
+    return out
+
+
+def _finished_run(outdir: Path, fingerprint: str) -> dict | None:
+    """The record of a run already finished in ``outdir`` with the same fingerprint, if its
+    checkpoint is gone (the run completed)."""
+    path = outdir / "result.json"
+    if (outdir / JOURNAL_NAME).exists() or not path.is_file():
+        return None
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(record, dict) or record.get("fingerprint") != fingerprint:
+        return None
+    return record
+
+
+def _result_from_record(record: dict) -> OptimizeResult:
+    searched = record.get("searched")
+    return OptimizeResult(
+        x=None if searched is None else np.array(list(searched.values()), dtype=float),
+        fun=record["cost_optimizer"] if record.get("cost_optimizer") is not None else math.inf,
+        nfev=int(record["evaluations_optimizer"]), nit=int(record["nit"]), status=Status(record["status"]),
+        message=str(record["message"]), optimizer=str(record["optimizer"]), seed=int(record["seed"]),
+        wall_time_s=float(record.get("wall_time_optimizer_s") or math.nan), traceback=record.get("traceback"),
+    )
 
 
 def _finite_or_none(x):
@@ -201,6 +455,6 @@ def format_table(record: dict) -> str:
         f"cost {cost if cost is None else f'{cost:.6g}'}, {record['evaluations']} evaluations, "
         f"{record['wall_time_s']:.2f} s"
     )
-    if record["status"] == Status.FAILED.value:
-        lines.append(f"failed: {record['message']}")
+    if record["status"] in (Status.FAILED.value, Status.TIMEOUT.value):
+        lines.append(f"{record['status']}: {record['message']}")
     return "\n".join(lines)

@@ -251,8 +251,71 @@ def problem_from_dataset(cfg, ds: StartupDataset, truth: dict | None, preset_bou
     )
 
 
+#: Sign each parameter's bounds must respect: > 0 ("positive") or >= 0 ("non-negative").
+PARAMETER_SIGNS = {"Rs": "positive", "Ls": "positive", "Le": "positive", "Rr": "positive", "J": "positive",
+                   "fv": "non-negative", "fc": "non-negative"}
+
+
+def check_config(cfg) -> None:
+    """Configuration checks of this problem that need no data, run by the harness before any
+    work starts: ``bounds`` names and values, ``problem.cost``, ``problem.friction_case``."""
+    user = cfg.get("bounds")
+    if user is not None:
+        if not hasattr(user, "items"):
+            raise ConfigError(f"bounds: expected a mapping {{name: [low, high]}}, got {user!r}")
+        unknown = sorted(str(k) for k in user if k not in PARAMETER_NAMES)
+        if unknown:
+            raise ConfigError(f"bounds: unknown parameter(s) {unknown}; valid: {list(PARAMETER_NAMES)}")
+        for n, val in user.items():
+            _check_pair(f"bounds.{n}", n, val)
+    pcfg = cfg.problem
+    cost = pcfg.get("cost") or {}
+    exponent = cost.get("exponent", 1)
+    if isinstance(exponent, bool) or exponent not in (1, 2):
+        raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent!r}")
+    weights = cost.get("weights") or {}
+    if not hasattr(weights, "items"):
+        raise ConfigError(f"problem.cost.weights: expected a mapping {{channel: weight}}, got {weights!r}")
+    for k, w in weights.items():
+        if k not in WEIGHT_KEYS:
+            raise ConfigError(f"problem.cost.weights.{k}: unknown channel; valid: {list(WEIGHT_KEYS)}")
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not math.isfinite(w) or w < 0:
+            raise ConfigError(f"problem.cost.weights.{k}: must be a non-negative number, got {w!r}")
+    case = pcfg.get("friction_case", 2)
+    if isinstance(case, bool) or case not in (1, 2):
+        raise ConfigError(f"problem.friction_case: must be 1 (no Coulomb friction) or 2 (with), got {case!r}")
+
+
+def _check_pair(src: str, name: str, val) -> tuple[float, float]:
+    """``[low, high]`` -> floats, or a ConfigError naming ``src``: two finite numbers, low <
+    high, and the parameter's physical sign."""
+    if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) != 2:
+        raise ConfigError(f"{src}: expected [low, high], got {val!r}")
+    if any(isinstance(v, bool) for v in val):
+        raise ConfigError(f"{src}: expected two numbers [low, high], got {list(val)!r}")
+    try:
+        lo, hi = (float(v) for v in val)
+    except (TypeError, ValueError, OverflowError):
+        raise ConfigError(f"{src}: expected two numbers [low, high], got {list(val)!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ConfigError(f"{src}: bounds must be finite numbers, got [{lo}, {hi}]")
+    if lo >= hi:
+        raise ConfigError(f"{src}: low {lo} >= high {hi} (did you swap low and high?)")
+    sign = PARAMETER_SIGNS.get(name)
+    if sign == "positive" and lo <= 0:
+        raise ConfigError(f"{src}: {name} must be positive; low bound {lo} is not physical")
+    if sign == "non-negative" and lo < 0:
+        raise ConfigError(f"{src}: {name} cannot be negative; low bound {lo} is not physical")
+    return lo, hi
+
+
 def _choose_bounds(cfg, names, preset_bounds, ds) -> dict:
     user = cfg.get("bounds")
+    if user is not None:
+        unknown = set(user) - set(names)
+        if unknown:
+            raise ConfigError(f"bounds: unknown parameter(s) {sorted(unknown)}; searched here: {names}"
+                              + _not_searched_hint(unknown, names))
     out = {}
     derived = None
     for n in names:
@@ -261,24 +324,31 @@ def _choose_bounds(cfg, names, preset_bounds, ds) -> dict:
         elif preset_bounds is not None and n in preset_bounds:
             src, val = f"motor.bounds.{n}", preset_bounds[n]
         else:
-            derived = derived or derive_bounds(ds, tuple(names))
-            src, val = f"bounds.{n} (derived from data)", derived[n]
-        try:
-            lo, hi = (float(v) for v in val)
-        except (TypeError, ValueError):
-            raise ConfigError(f"{src}: expected [low, high], got {val}") from None
-        if lo >= hi:
-            raise ConfigError(f"{src}: low {lo} >= high {hi} (did you swap low and high?)")
-        if n not in ("fv", "fc") and lo <= 0:
-            raise ConfigError(f"{src}: {n} must be positive; low bound {lo} is not physical")
-        if lo < 0:
-            raise ConfigError(f"{src}: {n} cannot be negative; low bound {lo} is not physical")
-        out[n] = (lo, hi)
-    if user is not None:
-        unknown = set(user) - set(names)
-        if unknown:
-            raise ConfigError(f"bounds: unknown parameter(s) {sorted(unknown)}; searched here: {names}")
+            if derived is None:
+                derived = _derive_or_explain(ds, tuple(names))
+            src, val = f"bounds.{n} (derived from data: give bounds.{n}=[low,high] to override)", derived[n]
+        out[n] = _check_pair(src, n, val)
     return out
+
+
+def _not_searched_hint(unknown, names) -> str:
+    fixed = sorted(set(unknown) & set(PARAMETER_NAMES))
+    if not fixed:
+        return ""
+    return (f" ({fixed} not searched: fv and fc follow from the stop record, J from a known inertia)")
+
+
+def _derive_or_explain(ds, names) -> dict:
+    """:func:`derive_bounds`, with a failure turned into a ConfigError that says what to give."""
+    try:
+        with np.errstate(all="ignore"):
+            derived = derive_bounds(ds, names)
+    except ConfigError:
+        raise
+    except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError, IndexError) as exc:
+        raise ConfigError(f"bounds: cannot derive bounds from the data ({type(exc).__name__}: {exc}); "
+                          f"give bounds for {list(names)}, e.g. bounds={{Rs:[0.1,10]}}") from None
+    return derived
 
 
 def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:

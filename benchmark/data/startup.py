@@ -9,12 +9,15 @@ transform (:func:`benchmark.model.experiment.clarke`). Stop columns: ``t``, ``sp
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from benchmark.data.tables import (
+    _did_you_mean,
+    _short_repr,
     check_meta_type,
     check_time_column,
     read_meta,
@@ -22,7 +25,7 @@ from benchmark.data.tables import (
     write_table_atomic,
     write_yaml_atomic,
 )
-from benchmark.errors import DataError
+from benchmark.errors import DataError, DataWarning
 from benchmark.model.experiment import clarke
 
 VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"))
@@ -31,6 +34,13 @@ CURRENT_COLUMNS = (("i_alpha", "i_beta"), ("i_r", "i_s"))
 #: A mechanical speed above this (rad/s, about 15 000 rpm) is implausible for a motor in
 #: this benchmark; a column that exceeds it is probably in rpm.
 PLAUSIBLE_SPEED_LIMIT = 1600.0
+#: A speed above this multiple of the synchronous speed (plus 1 rad/s) cannot come from a
+#: motor starting on its supply (see :func:`_check_speed_plausibility`).
+SYNC_SPEED_MARGIN = 1.5
+#: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
+META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
+             "inertia", "description")
+MAX_POLE_PAIRS = 100
 
 
 @dataclass
@@ -93,23 +103,31 @@ class StartupDataset:
         return m
 
 
-def load_startup_dataset(folder) -> StartupDataset:
-    """Read and validate a ``kind: startup`` folder. Raises DataError naming file/column/row."""
+def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupDataset:
+    """Read and validate a ``kind: startup`` folder. Raises DataError naming file/column/row;
+    data that load but look wrong (a speed that may be in rpm, unknown ``meta.yaml`` keys,
+    unused columns) raise a :class:`benchmark.errors.DataWarning`. ``max_bytes`` overrides the
+    table size limit (:func:`benchmark.data.tables.max_table_bytes`)."""
     folder = Path(folder)
     meta = read_meta(folder, {"pole_pairs": int, "sample_time": float})
     meta_path = folder / "meta.yaml"
     kind = meta.get("kind", "startup")
     if kind != "startup":
         raise DataError(meta_path, f"kind is {kind!r}; this problem reads 'startup' data sets")
+    unknown = [str(k) for k in meta if k not in META_KEYS]
+    if unknown:
+        hints = "".join(_did_you_mean(k, META_KEYS) for k in unknown)
+        warnings.warn(DataWarning.at(meta_path, f"unknown key(s) {unknown} ignored{hints}; known keys: "
+                                                f"{list(META_KEYS)}"), stacklevel=2)
     p = meta["pole_pairs"]
-    if p < 1:
-        raise DataError(meta_path, f"key 'pole_pairs' must be >= 1, got {p}")
+    if not 1 <= p <= MAX_POLE_PAIRS:
+        raise DataError(meta_path, f"key 'pole_pairs' must be between 1 and {MAX_POLE_PAIRS}, got {p}")
     ts = float(meta["sample_time"])
     if not ts > 0:
         raise DataError(meta_path, f"key 'sample_time' must be > 0 s, got {ts}")
     hold = meta.get("input_hold", "linear")
-    if hold not in ("zoh", "linear"):
-        raise DataError(meta_path, f"key 'input_hold' must be 'zoh' or 'linear', got {hold!r}")
+    if not isinstance(hold, str) or hold not in ("zoh", "linear"):
+        raise DataError(meta_path, f"key 'input_hold' must be 'zoh' or 'linear', got {_short_repr(hold)}")
     optional = {}
     for key in ("dc_link_voltage", "supply_frequency", "inertia"):
         if meta.get(key) is not None:
@@ -118,11 +136,13 @@ def load_startup_dataset(folder) -> StartupDataset:
                 raise DataError(meta_path, f"key '{key}' must be > 0, got {meta[key]}")
             optional[key] = float(meta[key])
 
-    startup_files = sorted(folder.glob("startup*.csv"))
+    startup_files = _record_files(folder, "startup")
     if not startup_files:
-        raise DataError(folder, "no startup*.csv file: a time-domain data set needs at least one start-up record")
-    startups = [_read_startup(f, ts) for f in startup_files]
-    stops = [_read_stop(f) for f in sorted(folder.glob("stop*.csv"))]
+        raise DataError(folder, "no startup*.csv file: a time-domain data set needs at least one start-up "
+                                "record")
+    startups = [_read_startup(f, ts, max_bytes) for f in startup_files]
+    stops = [_read_stop(f, max_bytes) for f in _record_files(folder, "stop")]
+    _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"))
     return StartupDataset(
         pole_pairs=p,
         sample_time=ts,
@@ -134,31 +154,51 @@ def load_startup_dataset(folder) -> StartupDataset:
     )
 
 
-def _read_startup(path: Path, sample_time: float) -> StartupRecord:
+def _record_files(folder: Path, prefix: str) -> list[Path]:
+    """``prefix*.csv`` in name order (also folders and broken links with such names, which
+    the table reader then reports)."""
+    return sorted(f for f in folder.glob(f"{prefix}*.csv"))
+
+
+def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None) -> StartupRecord:
     alternatives = [("t", *v, *i, "speed") for v in VOLTAGE_COLUMNS for i in CURRENT_COLUMNS]
-    df, cols = read_table(path, alternatives)
+    df, cols = read_table(path, alternatives, max_bytes=max_bytes, warn_unused=True)
     t = df["t"].to_numpy()
     step = check_time_column(path, t)
     if abs(step - sample_time) > 1e-3 * sample_time:
+        ratio = step / sample_time
+        hint = ""
+        for factor, unit in ((1e3, "ms"), (1e6, "us")):
+            if abs(ratio / factor - 1) < 0.01:
+                hint = f" (is t in {unit}? t must be in seconds)"
         raise DataError(
-            path, f"time step {step:.6g} s differs from meta.yaml sample_time {sample_time:.6g} s", column="t"
+            path, f"time step {step:.6g} s differs from meta.yaml sample_time {sample_time:.6g} s{hint}",
+            column="t"
         )
-    if "v_alpha" in cols:
-        v_a, v_b = df["v_alpha"].to_numpy(), df["v_beta"].to_numpy()
-    else:
-        v_a, v_b = clarke(df["v_r"], df["v_s"], df["v_t"])
-    if "i_alpha" in cols:
-        i_a, i_b = df["i_alpha"].to_numpy(), df["i_beta"].to_numpy()
-    else:
-        i_r, i_s = df["i_r"].to_numpy(), df["i_s"].to_numpy()
-        i_a, i_b = clarke(i_r, i_s, -i_r - i_s)
+    with np.errstate(all="ignore"):
+        if "v_alpha" in cols:
+            v_a, v_b = df["v_alpha"].to_numpy(), df["v_beta"].to_numpy()
+        else:
+            v_a, v_b = clarke(df["v_r"], df["v_s"], df["v_t"])
+        if "i_alpha" in cols:
+            i_a, i_b = df["i_alpha"].to_numpy(), df["i_beta"].to_numpy()
+        else:
+            i_r, i_s = df["i_r"].to_numpy(), df["i_s"].to_numpy()
+            i_a, i_b = clarke(i_r, i_s, -i_r - i_s)
+    for name, x, source in (("v_alpha", v_a, "v_r, v_s, v_t"), ("v_beta", v_b, "v_r, v_s, v_t"),
+                             ("i_alpha", i_a, "i_r, i_s"), ("i_beta", i_b, "i_r, i_s")):
+        if not np.all(np.isfinite(x)):
+            k = int(np.argmax(~np.isfinite(x)))
+            raise DataError(path, f"phase values too large: {name} computed from columns {source} overflows "
+                                  "in the Clarke transform", row=k + 1)
     speed = df["speed"].to_numpy()
     _check_speed(path, speed)
-    return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed, source=str(path))
+    return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed,
+                         source=str(path))
 
 
-def _read_stop(path: Path) -> StopRecord:
-    df, _ = read_table(path, [("t", "speed")])
+def _read_stop(path: Path, max_bytes: int | None = None) -> StopRecord:
+    df, _ = read_table(path, [("t", "speed")], max_bytes=max_bytes, warn_unused=True)
     t = df["t"].to_numpy()
     check_time_column(path, t)
     speed = df["speed"].to_numpy()
@@ -167,15 +207,78 @@ def _read_stop(path: Path) -> StopRecord:
 
 
 def _check_speed(path: Path, speed: np.ndarray) -> None:
+    """Hard limit: beyond :data:`PLAUSIBLE_SPEED_LIMIT` no motor of this benchmark turns."""
     k = int(np.argmax(np.abs(speed)))
     if abs(speed[k]) > PLAUSIBLE_SPEED_LIMIT:
         raise DataError(
             path,
-            f"speed {speed[k]:.6g} is implausible in rad/s (is the column in rpm? "
-            f"rad/s = rpm * pi / 30)",
+            f"speed {speed[k]:.6g} is implausible in rad/s (above {PLAUSIBLE_SPEED_LIMIT:.0f} rad/s, "
+            f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; is the column in rpm? rad/s = rpm * pi / 30)",
             column="speed",
             row=k + 1,
         )
+
+
+def synchronous_speed_estimate(rec: StartupRecord, pole_pairs: int, sample_time: float) -> float:
+    """Mechanical synchronous speed (rad/s) estimated from the rotation of the current phasor:
+    the fastest mean rotation over ten windows of the record (0 if it cannot be told)."""
+    i = rec.i_alpha + 1j * rec.i_beta
+    n = len(i)
+    if n < 20:
+        return 0.0
+    mag = np.abs(i)
+    if not mag.max() > 0:
+        return 0.0
+    phase = np.unwrap(np.angle(i))
+    best = 0.0
+    edges = np.linspace(0, n - 1, 11).astype(int)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if b - a < 2 or np.median(mag[a:b + 1]) < 0.05 * mag.max():
+            continue
+        best = max(best, abs(phase[b] - phase[a]) / ((b - a) * sample_time))
+    return best / pole_pairs
+
+
+def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
+                              supply_frequency: float | None) -> None:
+    """Speed against the synchronous speed ``2 pi f / p``: an induction motor starting on its
+    supply with no driving load cannot run much above it (the start-up overshoot stays well
+    below: about 20 % for an 8-pole variant of the paper motor). With ``supply_frequency`` in
+    meta.yaml the check is strict: above :data:`SYNC_SPEED_MARGIN` times the synchronous
+    speed is an error. Without it, the
+    frequency is estimated from the current phasor's rotation, and exceeding the margin is
+    only a :class:`DataWarning` (the estimate can be fooled), typically a column in rpm."""
+    records = [(r.source, r.speed) for r in startups] + [(r.source, r.speed) for r in stops]
+    if supply_frequency is not None:
+        w_sync = 2 * np.pi * supply_frequency / p
+        basis = f"supply_frequency {supply_frequency:g} Hz and pole_pairs {p} in meta.yaml"
+        strict = True
+    else:
+        estimates = [synchronous_speed_estimate(r, p, float(np.median(np.diff(r.t))) if len(r.t) > 1 else 1.0)
+                     for r in startups]
+        w_sync = max(estimates) if estimates else 0.0
+        basis = (f"estimated from the rotation of the currents (about {w_sync * p / (2 * np.pi):.3g} Hz) and "
+                 f"pole_pairs {p}")
+        strict = False
+    if not w_sync > 0:
+        return
+    limit = SYNC_SPEED_MARGIN * w_sync + 1.0
+    for source, speed in records:
+        k = int(np.argmax(np.abs(speed)))
+        if abs(speed[k]) <= limit:
+            continue
+        v = float(speed[k])
+        msg = (f"speed {v:.6g} rad/s is {abs(v) / w_sync:.3g} times the synchronous speed {w_sync:.4g} rad/s "
+               f"({basis})")
+        as_rpm = abs(v) * np.pi / 30
+        rpm_hint = (f"; if the column is in rpm, convert it: rad/s = rpm * pi / 30 ({abs(v):.6g} rpm = "
+                    f"{as_rpm:.4g} rad/s)")
+        if strict:
+            raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
+                            + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)
+        warnings.warn(DataWarning.at(source, "looks like rpm, not rad/s: " + msg + rpm_hint
+                                     + " (give supply_frequency in meta.yaml to make this an error)",
+                                     column="speed", row=k + 1), stacklevel=3)
 
 
 def write_startup_dataset(folder, ds: StartupDataset, truth: dict | None = None) -> Path:
