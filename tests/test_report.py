@@ -292,3 +292,76 @@ def test_bad_arguments_are_one_line_errors(tmp_path):
         timeout=60,
     )
     assert proc.returncode == 2 and proc.stderr.startswith("error: ") and "no result.json" in proc.stderr
+
+
+# -- results/crb.md: the Cramer-Rao bounds of benchmark.experiments.crb -----------------------------
+
+
+class LinearOutputs:
+    """A stand-in for TimeDomainProblem.simulate: outputs (i_alpha, i_beta, speed) linear in theta,
+    y_c = A_c theta, so the Fisher information is exactly sum_c A_c^T A_c / sigma_c^2."""
+
+    def __init__(self, A):
+        self.A = A  # (3, N, n)
+
+    def simulate(self, X):
+        return [np.einsum("cjk,mk->mcj", self.A, np.atleast_2d(X))]
+
+
+def test_startup_fisher_of_a_linear_model():
+    from benchmark.experiments import crb
+
+    rng = np.random.default_rng(1)
+    A = rng.normal(size=(3, 50, 7))
+    theta = np.array([5.0, 0.1, 0.01, 1.5, 0.006, 0.0003, 0.04])
+    sc, sw = 0.05, 0.25
+    F = crb.startup_fisher(LinearOutputs(A), theta, sc, sw)
+    expected = (A[0].T @ A[0] + A[1].T @ A[1]) / sc**2 + A[2].T @ A[2] / sw**2
+    np.testing.assert_allclose(F, expected, rtol=1e-6)
+
+
+def test_stop_bound_matches_monte_carlo_least_squares():
+    """The free-stop information on (w0, tau, b) against the spread of least-squares fits of
+    the closed form to 300 noisy records (the fit is efficient here: linearisation is exact to
+    well below the noise)."""
+    from scipy import optimize
+
+    from benchmark.experiments import crb
+
+    t = np.arange(0.0, 25.0, 0.01)
+    w0, tau, b, sw = 260.0, 19.45, 6.69, 0.5
+    bound = np.sqrt(np.diag(np.linalg.inv(crb.stop_fisher(t, w0, tau, b, sw))))
+
+    def model(q):
+        w = (q[0] + q[1] * q[2]) * np.exp(-t / q[1]) - q[1] * q[2]
+        return np.where(w > 0, w, 0.0)
+
+    clean = model([w0, tau, b])
+    rng = np.random.default_rng(0)
+    est = []
+    for _ in range(300):
+        y = clean + rng.normal(0.0, sw, t.shape)
+        est.append(optimize.least_squares(lambda q, y=y: model(q) - y, [w0, tau, b], x_scale=[w0, tau, b]).x)
+    spread = np.std(np.array(est), axis=0)
+    # 300 fits: the sample standard deviation is within ~12 % of the truth at 3 sigma
+    np.testing.assert_allclose(spread, bound, rtol=0.12)
+
+
+def test_joint_bound_between_conditional_and_startup_only():
+    """With a stop record that pins tau_m and fc/J, the joint bound of the 5 searched parameters
+    tends to the conditional one; with a stop record that says nothing, to the start-up-only one."""
+    from benchmark.experiments import crb
+
+    rng = np.random.default_rng(2)
+    M = rng.normal(size=(40, 7))
+    F7 = M.T @ M
+    theta = np.array([1.2, 0.8, 1.1, 0.9, 1.3, 0.7, 1.05])  # O(1): the limits stay well conditioned
+    sure = np.diag([1.0, 1e10, 1e10])  # (w0, tau, b): tau and b known exactly
+    b = crb.bounds(theta, F7, sure)
+    np.testing.assert_allclose(b["joint"][:5], b["conditional"][:5], rtol=1e-5)
+    vague = np.diag([1.0, 1e-10, 1e-10])
+    b = crb.bounds(theta, F7, vague)
+    np.testing.assert_allclose(b["joint"], b["startup_only"], rtol=1e-5)
+    # conditional fv and fc carry J's relative bound
+    assert b["conditional"][5] / theta[5] == pytest.approx(b["conditional"][4] / theta[4])
+    assert b["conditional"][6] / theta[6] == pytest.approx(b["conditional"][4] / theta[4])
