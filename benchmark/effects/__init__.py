@@ -109,7 +109,7 @@ def load_effects(problem: str = "timedomain", names=None) -> dict[str, Effect]:
     out = {}
     for path in sorted(CONF_EFFECTS.glob("*.yaml")):
         doc = yaml.safe_load(path.read_text())
-        for key, spec in doc.items():
+        for spec in doc.values():
             if not isinstance(spec, dict) or "_target_" not in spec:
                 continue
             eff = instantiate(spec)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.effects import Effect, EffectContext
+from benchmark.effects import Effect
 from benchmark.model.extended import IDX
 
 

@@ -1,0 +1,604 @@
+"""Sim-to-real gap diagnosis for the slip sweep (the admittance problem).
+
+1. Identify the base model: the 6-parameter circuit with ``X1 = X2`` (MODEL.md section 6),
+   i.e. ``R1t, X, R2, R0, X0``, by the Sanathanan-Koerner regression of its bilinear form
+   (the "E" route, :func:`benchmark.costs.admittance.bilinear_regression`) and a least-squares
+   polish. No temperature compensation: a warming is a candidate effect, not part of the base.
+2. Estimate the noise of G and B from the data (differences of the base residual along each
+   sweep: a model error is smooth in slip, noise is not), and divide every residual by it.
+3. Localise the gap: shares of the residual energy by slip region (braking ``s > 1``,
+   motoring ``s_near <= s <= 1``, near synchronism ``|s| < s_near``, generating
+   ``s <= -s_near``), by component (G, B), by voltage level and by sweep direction.
+4. Fit every candidate augmentation (base + one effect of :mod:`benchmark.effects.admittance`)
+   from the base fit, and score it by
+
+   * the **held-out** reduction of the misfit: each fold is fitted on the rest of the data
+     and scored on the fold. Folds: the **voltage levels** when the data hold several (the
+     augmentation must predict a level it has not seen: what distinguishes saturation and
+     core loss); else the **sweep tables** when there are several (an up-sweep predicts the
+     down-sweep and back: what distinguishes a warming); else **interleaved readings**
+     (even/odd along the sweep: only guards against over-fitting noise);
+   * the in-sample reduction, and the information criterion ``delta chi^2/2 + k ln n``
+     (``k`` extra parameters, ``n`` residuals; < 0 earns the parameters).
+5. Verdict: the candidate with the largest held-out reduction among those that earn their
+   parameters and remove at least ``min_heldout_reduction`` of the held-out misfit, when the
+   base leaves a held-out gap above ``min_gap`` (chi^2 per residual; 1 = noise alone);
+   otherwise ``none``.
+
+It never reads ``truth.yaml``: data sets are loaded by
+:func:`benchmark.data.admittance.load_admittance`, which reads ``meta.yaml`` and the sweep
+tables only; the synthetic in-memory route discards the truth document at once.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from benchmark.costs.admittance import bilinear_regression
+from benchmark.data.admittance import AdmittanceData
+from benchmark.effects.admittance import AdmittanceEffect, SweepCircuit, SweepContext, heat_profile
+
+BASE_NAMES = ("R1t", "X", "R2", "R0", "X0")
+REGIONS = ("braking", "motoring", "near_synchronism", "generating")
+
+
+@dataclass
+class AdmittanceDiagnosisSettings:
+    """Knobs of the sweep diagnosis (``conf/diagnose.yaml``, block ``admittance_diagnosis``).
+
+    min_gap : base held-out chi^2 per residual above which a gap is declared (1 = noise).
+    min_heldout_reduction : share of the held-out misfit a candidate must remove.
+    fit_evaluations : evaluation limit of each local least-squares fit.
+    near_synchronism : ``s_near``, the half-width of the near-synchronism region (slip).
+    noise : the noise standard deviation of G and B (S) when known; null: estimated.
+    noise_floor : lower bound of the estimated noise, as a fraction of the full scale.
+    """
+
+    min_gap: float = 1.5
+    min_heldout_reduction: float = 0.1
+    fit_evaluations: int = 300
+    near_synchronism: float = 0.12
+    noise: float | None = None
+    noise_floor: float = 1e-5
+
+
+# ----------------------------------------------------------------------------- data
+
+
+@dataclass
+class SweepData:
+    """The readings of a sweep data set prepared for the diagnosis."""
+
+    s: np.ndarray
+    V: np.ndarray
+    Y: np.ndarray
+    sweep: np.ndarray
+    level: np.ndarray  # index of the voltage level of each reading
+    levels: np.ndarray  # the voltage levels, V
+    time: np.ndarray | None
+    full_scale: float
+    sigma: float = 1.0
+
+    @classmethod
+    def from_data(cls, d: AdmittanceData) -> SweepData:
+        V = np.asarray(d.voltage, float)
+        rounded = np.round(V, 3)
+        levels, level = np.unique(rounded, return_inverse=True)
+        # voltage levels that differ by less than 2 % are one level (a regulated supply's drift)
+        merged = [0]
+        for k in range(1, len(levels)):
+            merged.append(merged[-1] + (levels[k] > 1.02 * levels[k - 1]))
+        merged = np.asarray(merged)
+        level = merged[level]
+        levels = np.array([float(np.mean(V[level == j])) for j in range(int(level.max()) + 1)])
+        sweep = np.asarray(d.sweep if d.sweep is not None else np.zeros(d.n, int))
+        fs = float(d.full_scale_admittance or np.max(np.abs(d.Y)))
+        return cls(
+            s=np.asarray(d.slip, float),
+            V=V,
+            Y=np.asarray(d.Y),
+            sweep=sweep,
+            level=level,
+            levels=levels,
+            time=None if d.time is None else np.asarray(d.time, float),
+            full_scale=fs,
+        )
+
+    @property
+    def n(self) -> int:
+        return len(self.s)
+
+    def folds(self) -> tuple[str, list[np.ndarray]]:
+        """Held-out folds (masks over the readings) and what they are."""
+        if len(self.levels) >= 2:
+            return "voltage_level", [self.level == j for j in range(len(self.levels))]
+        tables = np.unique(self.sweep)
+        if len(tables) >= 2:
+            return "sweep_table", [self.sweep == k for k in tables]
+        idx = np.arange(self.n)
+        return "interleaved", [idx % 2 == 0, idx % 2 == 1]
+
+    def regions(self, s_near: float) -> dict[str, np.ndarray]:
+        s = self.s
+        return {
+            "braking": s > 1.0,
+            "motoring": (s >= s_near) & (s <= 1.0),
+            "near_synchronism": np.abs(s) < s_near,
+            "generating": s <= -s_near,
+        }
+
+
+def noise_estimate(data: SweepData, residual: np.ndarray, floor: float) -> dict[str, float]:
+    """Standard deviation of the noise on G and on B (S) from the base residual: within each sweep
+    table, in slip order, third differences (a smooth model error is suppressed, white noise has
+    variance ``20 sigma^2`` there), robustly through the median absolute value."""
+    out = {}
+    for name, r in (("G", residual.real), ("B", residual.imag)):
+        d = []
+        for k in np.unique(data.sweep):
+            m = np.flatnonzero(data.sweep == k)
+            m = m[np.argsort(data.s[m], kind="stable")]
+            if len(m) >= 8:
+                d.append(np.diff(r[m], 3))
+        d = np.concatenate(d) if d else np.diff(r, 3)
+        sigma = 1.4826 * float(np.median(np.abs(d))) / math.sqrt(20.0)
+        out[name] = max(sigma, floor * data.full_scale)
+    return out
+
+
+# ----------------------------------------------------------------------------- models
+
+
+class SweepModel:
+    """Base circuit (``R1t, X, R2, R0, X0``; ``X1 = X2 = X``) plus one effect's extras."""
+
+    def __init__(self, data: SweepData, effect: AdmittanceEffect | None, ctx: SweepContext):
+        self.data = data
+        self.effect = effect
+        self.ctx = ctx
+        self.extra_names = tuple(effect.extra_names) if effect is not None else ()
+        self.names = BASE_NAMES + self.extra_names
+        self.k = len(self.extra_names)
+
+    def circuit(self, x: np.ndarray) -> SweepCircuit:
+        R1t, X, R2, R0, X0 = (float(v) for v in x[:5])
+        c = SweepCircuit(R1t=R1t, X1=X, R2=R2, X2=X, R0=R0, X0=X0)
+        if self.effect is not None:
+            c = self.effect.augment(c, np.asarray(x[5:], float), self.ctx)
+        return c
+
+    def admittance(self, x: np.ndarray, mask=None) -> np.ndarray:
+        d = self.data
+        if mask is None:
+            return self.circuit(x).admittance(d.s, d.V)
+        c = self.circuit(x)
+        if not np.isscalar(c.copper):
+            c = c.with_(copper=np.asarray(c.copper)[mask])
+        return c.admittance(d.s[mask], d.V[mask])
+
+    def residual_complex(self, x, mask=None) -> np.ndarray:
+        """(model - measured)/sigma per reading, complex (G + jB)."""
+        Ym = self.data.Y if mask is None else self.data.Y[mask]
+        with np.errstate(all="ignore"):
+            return (self.admittance(x, mask) - Ym) / self.data.sigma
+
+    def residuals(self, x, mask=None) -> np.ndarray:
+        e = self.residual_complex(x, mask)
+        r = np.concatenate([e.real, e.imag])
+        return np.where(np.isfinite(r), r, 1e6)
+
+    def ssr(self, x, mask=None) -> float:
+        r = self.residuals(x, mask)
+        return float(r @ r)
+
+    def bounds(self, x_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        lo = np.concatenate([x_base[:5] * 0.25, np.zeros(0)])
+        hi = np.concatenate([x_base[:5] * 4.0, np.zeros(0)])
+        lo[3] = 0.0  # R0 may vanish
+        hi[3] = max(hi[3], 0.2 * x_base[4])
+        if self.effect is not None:
+            elo, ehi = self.effect.extra_bounds(self.ctx)
+            lo, hi = np.concatenate([lo, elo]), np.concatenate([hi, ehi])
+        return lo, hi
+
+    def fit(self, x0: np.ndarray, mask, max_nfev: int, x_base: np.ndarray | None = None) -> np.ndarray:
+        lo, hi = self.bounds(x_base if x_base is not None else x0)
+        span = hi - lo
+        u0 = np.clip((np.asarray(x0, float) - lo) / span, 1e-9, 1 - 1e-9)
+        sol = least_squares(
+            lambda u: self.residuals(lo + u * span, mask),
+            u0,
+            bounds=(0.0, 1.0),
+            method="trf",
+            x_scale="jac",
+            max_nfev=max_nfev,
+            xtol=1e-12,
+            ftol=1e-12,
+            gtol=1e-12,
+        )
+        return lo + sol.x * span
+
+
+def base_start(data: SweepData) -> np.ndarray:
+    """The base circuit from the bilinear regression (tie X1 = X2), weighted by the full scale."""
+    reg = bilinear_regression(data.s, data.Y, np.full(data.n, 1.0 / data.full_scale), model=6)
+    t = reg["tied"]
+    x = np.array([t["R1_total"], t["X1"], t["R2"], t["R0"], t["X0"]], float)
+    # a non-physical regression (tiny data sets, heavy noise): fall back to model A's crude reading
+    if not np.all(np.isfinite(x)) or np.any(x[[0, 1, 2, 4]] <= 0) or x[3] < 0:
+        Zsc = 1.0 / data.Y[np.argmin(np.abs(data.s - 1.0))]
+        Znl = 1.0 / data.Y[np.argmin(np.abs(data.s))]
+        R, X = abs(Zsc.real) / 2, abs(Zsc.imag) / 2
+        x = np.array([R, X, R, max(abs(Znl.real) - R, 1e-3), max(abs(Znl.imag) - X, 10 * X)])
+    return x
+
+
+def sweep_context(data: SweepData, x_base: np.ndarray) -> SweepContext:
+    """Scales of the sweep from the data and the base circuit (no truth)."""
+    Z1 = complex(x_base[0], x_base[1])
+    E = np.abs(data.V - data.V * data.Y * Z1)
+    I = np.abs(data.V * data.Y)
+    top = data.level == len(data.levels) - 1
+    stall = top & (np.abs(data.s - 1.0) == np.min(np.abs(data.s[top] - 1.0)))
+    return SweepContext(
+        E_top=float(np.max(E)),
+        I_stall=float(np.mean(I[stall])),
+        heat=heat_profile(data.time, data.V, data.Y),
+    )
+
+
+# ----------------------------------------------------------------------------- localisation
+
+
+def localise(model: SweepModel, x: np.ndarray, s_near: float) -> dict:
+    d = model.data
+    e = model.residual_complex(x)
+    eG, eB = e.real**2, e.imag**2
+    energy = eG + eB
+    total = float(energy.sum()) or 1.0
+    regions = d.regions(s_near)
+    by_region = {k: float(energy[m].sum() / total) for k, m in regions.items()}
+    by_region_component = {
+        f"{k}/{c}": float(v[m].sum() / total) for k, m in regions.items() for c, v in (("G", eG), ("B", eB))
+    }
+    by_level = {f"{v:.4g} V": float(energy[d.level == j].sum() / total) for j, v in enumerate(d.levels)}
+    direction = _directions(d)
+    by_direction = {k: float(energy[m].sum() / total) for k, m in direction.items() if m.any()}
+    # mean signed residual (in noise units) per region and component: the signature's sign
+    signs = {
+        f"{k}/{c}": float(np.mean(v[m])) if m.any() else 0.0
+        for k, m in regions.items()
+        for c, v in (("G", e.real), ("B", e.imag))
+    }
+    return {
+        "chi2_per_residual": float(energy.sum() / (2 * d.n)),
+        "by_channel": {"G": float(eG.sum() / total), "B": float(eB.sum() / total)},
+        "by_segment": by_region,
+        "by_slip_region": by_region,
+        "by_slip_region_and_component": by_region_component,
+        "mean_residual_over_noise": signs,
+        "by_voltage_level": by_level,
+        "by_sweep_direction": by_direction,
+        "current_residual_harmonics_A": {},
+    }
+
+
+def _directions(d: SweepData) -> dict[str, np.ndarray]:
+    up = np.zeros(d.n, bool)
+    down = np.zeros(d.n, bool)
+    for k in np.unique(d.sweep):
+        m = np.flatnonzero(d.sweep == k)
+        if len(m) < 2:
+            continue
+        if d.s[m[-1]] < d.s[m[0]]:
+            up[m] = True  # slip falling = speed rising
+        else:
+            down[m] = True
+    return {"up": up, "down": down}
+
+
+# ----------------------------------------------------------------------------- the diagnosis
+
+
+def _best_fit(model: SweepModel, starts, mask, settings, x_base):
+    best, best_ssr = None, np.inf
+    for x0 in starts:
+        x = model.fit(x0, mask, settings.fit_evaluations, x_base)
+        v = model.ssr(x, mask)
+        if v < best_ssr:
+            best, best_ssr = x, v
+    return best, best_ssr
+
+
+def diagnose_sweep(
+    ad: AdmittanceData,
+    effects: dict[str, AdmittanceEffect],
+    settings: AdmittanceDiagnosisSettings,
+    progress=None,
+) -> dict:
+    """Steps 1-5 on one sweep data set; returns the diagnosis document (no truth)."""
+    t0 = time.perf_counter()
+    data = SweepData.from_data(ad)
+    n_res = 2 * data.n
+    # 1. base identification (in full-scale units until the noise is known)
+    data.sigma = data.full_scale
+    x_start = base_start(data)
+    base = SweepModel(data, None, SweepContext(E_top=1.0, I_stall=1.0))
+    x_base = base.fit(x_start, None, 4 * settings.fit_evaluations, x_start)
+    x_base = base.fit(x_base, None, 4 * settings.fit_evaluations, x_base)
+    # 2. noise
+    r_fs = base.residual_complex(x_base) * data.sigma
+    sig = noise_estimate(data, r_fs, settings.noise_floor)
+    if settings.noise is not None:
+        sig = {"G": float(settings.noise), "B": float(settings.noise)}
+    data.sigma = math.sqrt(0.5 * (sig["G"] ** 2 + sig["B"] ** 2))
+    ctx = sweep_context(data, x_base)
+    base = SweepModel(data, None, ctx)
+    # 3. localisation
+    loc = localise(base, x_base, settings.near_synchronism)
+    fold_kind, folds = data.folds()
+    base_fold = [base.fit(x_base, ~m, settings.fit_evaluations, x_base) for m in folds]
+    held_base = sum(base.ssr(xf, m) for xf, m in zip(base_fold, folds, strict=True))
+    ins_base = base.ssr(x_base)
+    # 4. candidates
+    ranking, fitted = [], {}
+    for eff in effects.values():
+        if progress:
+            progress(eff.name)
+        model = SweepModel(data, eff, ctx)
+        starts = [np.concatenate([x_base, e]) for e in eff.extra_starts(ctx)]
+        x_full, ssr_full = _best_fit(model, starts, None, settings, x_base)
+        held_aug = 0.0
+        xs = []
+        for xf, m in zip(base_fold, folds, strict=True):
+            st = [np.concatenate([xf, e]) for e in eff.extra_starts(ctx)] + [x_full]
+            xk, _ = _best_fit(model, st, ~m, settings, x_base)
+            xs.append(xk)
+            held_aug += model.ssr(xk, m)
+        criterion = 0.5 * (ssr_full - ins_base) + model.k * math.log(n_res)
+        ranking.append(
+            {
+                "effect": eff.name,
+                "heldout_reduction": float(1.0 - held_aug / held_base) if held_base > 0 else 0.0,
+                "in_sample_reduction": float(1.0 - ssr_full / ins_base) if ins_base > 0 else 0.0,
+                "criterion": float(criterion),
+                "heldout_chi2_before": float(held_base / n_res),
+                "heldout_chi2_after": float(held_aug / n_res),
+                "extra_parameters": {n: float(v) for n, v in zip(model.extra_names, x_full[5:], strict=True)},
+            }
+        )
+        fitted[eff.name] = (model, x_full)
+    ranking.sort(key=lambda r: -r["heldout_reduction"])
+    # 5. verdict
+    gap = held_base / n_res
+    earned = [
+        r for r in ranking if r["criterion"] < 0 and r["heldout_reduction"] >= settings.min_heldout_reduction
+    ]
+    verdict = earned[0]["effect"] if (gap >= settings.min_gap and earned) else "none"
+    held_after = gap if verdict == "none" else earned[0]["heldout_chi2_after"]
+    doc = {
+        "verdict": verdict,
+        "ranking": ranking,
+        "localisation": loc,
+        "gap_before": {
+            "heldout_chi2_per_residual": gap,
+            "heldout_rms_over_noise": math.sqrt(gap),
+            "in_sample_chi2_per_residual": ins_base / n_res,
+            "rms_percent_of_full_scale": 100 * data.sigma / data.full_scale * math.sqrt(ins_base / n_res),
+        },
+        "gap_after": {
+            "heldout_chi2_per_residual": held_after,
+            "heldout_rms_over_noise": math.sqrt(held_after),
+        },
+        "heldout_scheme": {"kind": fold_kind, "folds": len(folds)},
+        "base": {
+            "model": "6-parameter circuit, X1 = X2",
+            "estimate": {
+                "R1_total": float(x_base[0]),
+                "X1": float(x_base[1]),
+                "R2": float(x_base[2]),
+                "X2": float(x_base[1]),
+                "R0": float(x_base[3]),
+                "X0": float(x_base[4]),
+            },
+        },
+        "noise_level": {
+            "G_S": sig["G"],
+            "B_S": sig["B"],
+            "percent_of_full_scale": 100 * data.sigma / data.full_scale,
+        },
+        "scales": {
+            "E_top_V": ctx.E_top,
+            "I_stall_A": ctx.I_stall,
+            "voltage_levels_V": data.levels.tolist(),
+            "readings": data.n,
+            "full_scale_admittance_S": data.full_scale,
+        },
+        "settings": asdict(settings),
+        "wall_time_s": time.perf_counter() - t0,
+    }
+    doc["_models"] = {"base": (base, x_base), "fitted": fitted}
+    return doc
+
+
+# ----------------------------------------------------------------------------- entry point
+
+
+def load_sweep(cfg) -> AdmittanceData:
+    """The data set of ``cfg.data.path``, or the synthetic plant's sweep (its truth discarded)."""
+    path = cfg.data.path if "data" in cfg else None
+    if path is not None:
+        from benchmark.data.admittance import load_admittance
+
+        return load_admittance(path)
+    from synthetic.admittance import make_dataset
+
+    data, _truth_kept_away = make_dataset(cfg)
+    return data
+
+
+def settings_from_config(cfg) -> AdmittanceDiagnosisSettings:
+    from omegaconf import OmegaConf
+
+    from benchmark.errors import ConfigError
+
+    block = cfg.get("admittance_diagnosis") if hasattr(cfg, "get") else None
+    block = OmegaConf.to_container(block) if OmegaConf.is_config(block) else dict(block or {})
+    known = set(AdmittanceDiagnosisSettings.__dataclass_fields__)
+    unknown = sorted(set(block) - known)
+    if unknown:
+        raise ConfigError(f"admittance_diagnosis: unknown key(s) {unknown}; known: {sorted(known)}")
+    return AdmittanceDiagnosisSettings(**block)
+
+
+def run_admittance_diagnosis(cfg, outdir, progress=None) -> dict:
+    """``python -m benchmark.diagnose problem=admittance ...``: diagnose one sweep data set and
+    write ``diagnosis.json``, ``diagnosis.md`` and the figures into ``outdir``."""
+    import json
+
+    from benchmark.data.tables import write_text_atomic
+    from benchmark.effects import load_effects
+
+    outdir = Path(outdir)
+    data = load_sweep(cfg)
+    names = list(cfg.candidates) if cfg.get("candidates") else None
+    effects = load_effects("admittance", names)
+    settings = settings_from_config(cfg)
+    doc = diagnose_sweep(data, effects, settings, progress=progress)
+    models = doc.pop("_models")
+    doc["data"] = cfg.data.path or "synthetic (in memory; truth kept away)"
+    outdir.mkdir(parents=True, exist_ok=True)
+    if cfg.get("figures", True):
+        doc["figures"] = sweep_figures(models, doc, outdir)
+    write_text_atomic(outdir / "diagnosis.json", json.dumps(doc, indent=2) + "\n")
+    write_text_atomic(outdir / "diagnosis.md", render_sweep_markdown(doc))
+    return doc
+
+
+def render_sweep_markdown(doc: dict) -> str:
+    loc = doc["localisation"]
+    hs = doc["heldout_scheme"]
+    lines = [
+        f"# Diagnosis (slip sweep): **{doc['verdict']}**",
+        "",
+        f"Data: {doc['data']}",
+        "",
+        f"Base model: {doc['base']['model']}; "
+        + ", ".join(f"{k} = {v:.5g}" for k, v in doc["base"]["estimate"].items())
+        + " ohm.",
+        "",
+        f"Held-out misfit: each {hs['kind'].replace('_', ' ')} ({hs['folds']} folds) predicted from a fit to "
+        "the others.",
+        "",
+        f"Held-out gap (RMS residual over noise): {doc['gap_before']['heldout_rms_over_noise']:.3f} before, "
+        f"{doc['gap_after']['heldout_rms_over_noise']:.3f} after (1.0 = the noise level); base RMS misfit "
+        f"{doc['gap_before']['rms_percent_of_full_scale']:.3f} % of full scale.",
+        "",
+        "## Where the base model misses",
+        "",
+        f"chi^2 per residual (in sample): {loc['chi2_per_residual']:.3f}",
+        "",
+        "| slip region | share of residual energy | of it in G | in B "
+        "| mean G residual / noise | mean B residual / noise |",
+        "|---|---|---|---|---|---|",
+    ]
+    comp, mean = loc["by_slip_region_and_component"], loc["mean_residual_over_noise"]
+    for k, v in loc["by_slip_region"].items():
+        lines.append(
+            f"| {k} | {100 * v:.1f} % | {100 * comp[k + '/G']:.1f} % | {100 * comp[k + '/B']:.1f} % "
+            f"| {mean[k + '/G']:+.2f} | {mean[k + '/B']:+.2f} |"
+        )
+    lines += ["", "| component | share |", "|---|---|"]
+    lines += [f"| {k} | {100 * v:.1f} % |" for k, v in loc["by_channel"].items()]
+    lines += ["", "| voltage level | share |", "|---|---|"]
+    lines += [f"| {k} | {100 * v:.1f} % |" for k, v in loc["by_voltage_level"].items()]
+    if loc["by_sweep_direction"]:
+        lines += ["", "| sweep direction | share |", "|---|---|"]
+        lines += [f"| {k} | {100 * v:.1f} % |" for k, v in loc["by_sweep_direction"].items()]
+    lines += [
+        "",
+        "## Candidates",
+        "",
+        "| effect | held-out reduction | in-sample reduction | criterion (< 0 earns its parameters) "
+        "| extra parameters |",
+        "|---|---|---|---|---|",
+    ]
+    for r in doc["ranking"]:
+        extra = ", ".join(f"{k} = {v:.4g}" for k, v in r["extra_parameters"].items())
+        lines.append(
+            f"| {r['effect']} | {100 * r['heldout_reduction']:.1f} % "
+            f"| {100 * r['in_sample_reduction']:.1f} % | {r['criterion']:.1f} | {extra} |"
+        )
+    nl = doc["noise_level"]
+    lines += [
+        "",
+        f"Noise estimated from the data: G {nl['G_S']:.3g} S, B {nl['B_S']:.3g} S "
+        f"({nl['percent_of_full_scale']:.4f} % of full scale).",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def sweep_figures(models: dict, doc: dict, outdir) -> list[str]:
+    """``residual_map.png`` (G, B residual over noise against slip, per voltage level, before and
+    after the verdict's augmentation) and ``fit.png`` (measured G, B with both models)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    base, x_base = models["base"]
+    aug = models["fitted"].get(doc["verdict"])
+    d = base.data
+    files = []
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    e0 = base.residual_complex(x_base)
+    e1 = aug[0].residual_complex(aug[1]) if aug is not None else None
+    for ax, comp, name in ((axes[0], np.real, "G"), (axes[1], np.imag, "B")):
+        for j, v in enumerate(d.levels):
+            m = d.level == j
+            order = np.argsort(d.s[m])
+            ax.plot(d.s[m][order], comp(e0[m])[order], ".-", lw=0.6, ms=3, label=f"base, {v:.3g} V")
+            if e1 is not None:
+                ax.plot(d.s[m][order], comp(e1[m])[order], "x", ms=3, label=f"+ {doc['verdict']}, {v:.3g} V")
+        for b in (1.0, 0.0):
+            ax.axvline(b, color="0.6", lw=0.5)
+        ax.set_ylabel(f"{name} residual / noise")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=6, ncol=2)
+    axes[1].set_xlabel("slip")
+    axes[0].set_title(
+        f"Residual map: braking s > 1, motoring, near synchronism, generating s < 0; "
+        f"verdict {doc['verdict']}",
+        fontsize=8,
+    )
+    fig.tight_layout()
+    fig.savefig(Path(outdir) / "residual_map.png", dpi=120)
+    plt.close(fig)
+    files.append("residual_map.png")
+
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    Y0 = base.admittance(x_base)
+    Y1 = aug[0].admittance(aug[1]) if aug is not None else None
+    for ax, comp, name in ((axes[0], np.real, "G (S)"), (axes[1], np.imag, "B (S)")):
+        m = d.level == len(d.levels) - 1
+        order = np.argsort(d.s[m])
+        ax.plot(d.s[m][order], comp(d.Y[m])[order], "k.", ms=4, label=f"measured, {d.levels[-1]:.3g} V")
+        ax.plot(d.s[m][order], comp(Y0[m])[order], "-", lw=1, label="base")
+        if Y1 is not None:
+            ax.plot(d.s[m][order], comp(Y1[m])[order], "--", lw=1, label=f"+ {doc['verdict']}")
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    axes[1].set_xlabel("slip")
+    fig.tight_layout()
+    fig.savefig(Path(outdir) / "fit.png", dpi=120)
+    plt.close(fig)
+    files.append("fit.png")
+    return files
