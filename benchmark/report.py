@@ -42,9 +42,10 @@ Definitions:
 * **Fixed budget**: the best cost after B evaluations, from history.csv. A run that spent
   its budget before B has no value at B (it was not given B); a run that stopped on its own
   (status ``converged``) keeps its final cost. Medians are over the runs with a value.
-* **ECDF**: fraction of (run, target) pairs reached after a number of evaluations, with
-  targets ``f* (1 + d)``, d = 10^2 ... 10^-4 (5 per decade), as COCO and IOHanalyzer draw
-  runtime distributions (with the same replacement of ``|f*|`` as above).
+* **ECDF**: fraction of (run, target) pairs reached after a number of evaluations, as COCO
+  and IOHanalyzer draw runtime distributions, with 31 targets per instance ``f* + D``, D
+  log-spaced from the cost range (median first cost minus ``f*``) down to ``1e-4 |f*|`` (with
+  the same replacement of ``|f*|`` as above).
 """
 
 from __future__ import annotations
@@ -80,8 +81,10 @@ INSTANCE_KEY = "noise.seed"
 #: f* below this fraction of the cost range (median first cost - f*) counts as zero: target
 #: precisions are then relative to NEGLIGIBLE * range instead of |f*|.
 NEGLIGIBLE = 1e-6
-#: ECDF precisions d: targets f* + d |f*| (f* (1 + d) for positive costs).
-ECDF_PRECISIONS = 10.0 ** np.linspace(2, -4, 31)
+#: ECDF targets: f* + D, with 31 precisions D log-spaced from the cost range (median first
+#: cost - f*) down to ECDF_FINEST * |f*|.
+ECDF_TARGETS = 31
+ECDF_FINEST = 1e-4
 IOH_DAT_HEADER = "evaluations raw_y"
 IOH_FORMAT_VERSION = "0.3.22"  # the IOHexperimenter Analyzer-logger format written here
 
@@ -204,8 +207,7 @@ def label_runs(runs: list[Run]) -> None:
         keys = _varying(
             [flats[i] for i in idx],
             lambda k: (
-                k.split(".")[0] in ("optimizer", "budget", "polish_budget", "time_limit_s")
-                and k != "optimizer.name"
+                k.split(".")[0] in ("optimizer", "budget", "polish_budget", "time_limit_s") and k != "optimizer.name"
             ),
         )
         for i in idx:
@@ -232,10 +234,16 @@ def quantile(values, q: float) -> float:
 @dataclass
 class Instance:
     best: float  # f*: the best cost of any run on this instance
-    scale: float  # what target precisions are relative to
+    scale: float  # what target precisions are relative to (|f*|, see NEGLIGIBLE)
+    span: float = 1.0  # median first cost - f*
 
     def target(self, precision: float) -> float:
         return self.best + precision * self.scale
+
+    def ecdf_targets(self) -> np.ndarray:
+        finest = ECDF_FINEST * self.scale
+        top = self.span if self.span > finest else 1e6 * finest
+        return self.best + np.geomspace(top, finest, ECDF_TARGETS)
 
 
 def instances(runs: list[Run]) -> dict[tuple[str, str], Instance]:
@@ -248,7 +256,7 @@ def instances(runs: list[Run]) -> dict[tuple[str, str], Instance]:
         span = span if span > 0 and math.isfinite(span) else 1.0
         # a fit that reaches ~0 (noise-free data, exact model): precisions relative to the range
         scale = max(abs(fstar), NEGLIGIBLE * span) if math.isfinite(fstar) else span
-        out[key] = Instance(best=fstar, scale=scale)
+        out[key] = Instance(best=fstar, scale=scale, span=span)
     return out
 
 
@@ -359,17 +367,14 @@ def winners(rows: list[Row], opts: dict) -> dict[str, list[str]]:
             full = [
                 r
                 for r in grp
-                if r.values[f"cost_at_{b}_n"] == r.values["runs"]
-                and math.isfinite(r.values[f"cost_at_{b}_median"])
+                if r.values[f"cost_at_{b}_n"] == r.values["runs"] and math.isfinite(r.values[f"cost_at_{b}_median"])
             ]
             if not full:
                 continue
             lines.append(f"at {b} evaluations: " + _ranking(full, f"cost_at_{b}_median", "median best cost"))
         fin = [r for r in grp if math.isfinite(r.values["cost_median"])]
         if fin:
-            lines.append(
-                "whole budget (with polish where on): " + _ranking(fin, "cost_median", "median final cost")
-            )
+            lines.append("whole budget (with polish where on): " + _ranking(fin, "cost_median", "median final cost"))
         reach = sorted([r for r in grp if r.values["target_reached"]], key=lambda r: r.values["ert"])
         if reach:
             lines.append(
@@ -452,9 +457,7 @@ def _accuracy_table(grp: list[Row], params: list[str], tol: float) -> tuple[list
         cells = [r.algorithm, str(v["runs"]), str(v["failed"]), succ]
         for p in params:
             cells.append(
-                f"{_signed_pct(v[f'{p}_median'])} [{_pct(v[f'{p}_iqr'])}]"
-                if not math.isnan(v[f"{p}_median"])
-                else "–"
+                f"{_signed_pct(v[f'{p}_median'])} [{_pct(v[f'{p}_iqr'])}]" if not math.isnan(v[f"{p}_median"]) else "–"
             )
         cells += [_g(v["cost_median"]), _g(v["wall_time_median_s"], 3)]
         body.append(cells)
@@ -514,16 +517,12 @@ def render_markdown(rows: list[Row], inst, opts, figures: dict, command: str, n_
         grp = [r for r in rows if r.group == group]
         params = grp[0].parameters
         keys = sorted(k for k in inst if k[0] == group)
-        fstar = ", ".join(
-            f"{_g(inst[k].best, 8)}" + (f" (noise.seed {k[1]})" if len(keys) > 1 else "") for k in keys
-        )
+        fstar = ", ".join(f"{_g(inst[k].best, 8)}" + (f" (noise.seed {k[1]})" if len(keys) > 1 else "") for k in keys)
         out += [f"## {group}", "", f"Best cost found (f*): {fstar}.", ""]
         if wins.get(group):
             out += ["Who wins:", ""] + [f"- {line}" for line in wins[group]] + [""]
         out += ["### Parameter errors", ""] + _md_table(*_accuracy_table(grp, params, tol)) + [""]
-        out += (
-            ["### Fixed target and fixed budget", ""] + _md_table(*_budget_table(grp, opts["budgets"])) + [""]
-        )
+        out += ["### Fixed target and fixed budget", ""] + _md_table(*_budget_table(grp, opts["budgets"])) + [""]
         failed = [r for row in grp for r in row.runs if r.failed]
         if failed:
             out += ["### Failed runs", ""]
@@ -614,12 +613,21 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         slug = _slug(group)
         made[group] = {}
         grid = _grid(allruns)
+        # one colour per optimiser; its +polish variant dashed in the same colour
+        bases = sorted({r.algorithm.replace("+polish", "") for r in grp})
+        style = {
+            r.algorithm: (
+                f"C{bases.index(r.algorithm.replace('+polish', '')) % 10}",
+                "--" if "+polish" in r.algorithm else "-",
+            )
+            for r in grp
+        }
 
         # convergence: median and quartiles of the best cost over the runs
         fig, ax = plt.subplots(figsize=(7, 4.5))
         positive = True
-        for k, row in enumerate(grp):
-            color = f"C{k % 10}"
+        for row in grp:
+            color, ls = style[row.algorithm]
             M = np.array([[r.best_at(e) for e in grid] for r in row.runs])
             med = np.array([quantile(list(c), 0.5) for c in M.T])
             lo = np.array([quantile(list(c), 0.25) for c in M.T])
@@ -628,7 +636,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
             if not show.any():
                 continue
             positive &= bool(np.all(med[show] > 0))
-            ax.plot(grid[show], med[show], color=color, lw=1.6, label=f"{row.algorithm} (n={len(row.runs)})")
+            ax.plot(grid[show], med[show], color=color, ls=ls, lw=1.6, label=f"{row.algorithm} (n={len(row.runs)})")
             band = np.isfinite(lo) & np.isfinite(hi)
             ax.fill_between(grid[band], lo[band], hi[band], color=color, alpha=0.18, lw=0)
         fstars = [inst[key].best for key in inst if key[0] == group and math.isfinite(inst[key].best)]
@@ -649,16 +657,15 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
 
         # ECDF of (run, target) pairs
         fig, ax = plt.subplots(figsize=(7, 4.5))
-        for k, row in enumerate(grp):
-            hits = np.array(
-                [r.evals_to(inst[(r.group, r.instance)].target(d)) for r in row.runs for d in ECDF_PRECISIONS]
-            )
+        for row in grp:
+            hits = np.array([r.evals_to(t) for r in row.runs for t in inst[(r.group, r.instance)].ecdf_targets()])
             frac = np.array([np.mean(hits <= e) for e in grid])
             ax.step(
                 grid,
                 frac,
                 where="post",
-                color=f"C{k % 10}",
+                color=style[row.algorithm][0],
+                ls=style[row.algorithm][1],
                 lw=1.6,
                 label=f"{row.algorithm} (n={len(row.runs)})",
             )
@@ -667,7 +674,9 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         ax.set_xlabel("evaluations (counted by the harness)")
         ax.set_ylabel("fraction of (run, target) pairs reached (-)")
         ax.set_title(
-            f"{group}: ECDF, {len(ECDF_PRECISIONS)} targets f* (1 + d), d = 1e2 ... 1e-4", fontsize=10
+            f"{group}: ECDF over {ECDF_TARGETS} targets per instance, f* + D, "
+            f"D from the cost range down to {ECDF_FINEST:g} |f*|",
+            fontsize=9,
         )
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7, loc="upper left")
@@ -790,9 +799,7 @@ def parse_args(argv: Sequence[str]) -> dict:
     for key in ("target_rel", "success_tol"):
         if not isinstance(opts[key], (int, float)) or isinstance(opts[key], bool) or opts[key] < 0:
             raise ReportError(f"{key}: expected a non-negative number, got {opts[key]!r}")
-    if opts["target_abs"] is not None and (
-        not isinstance(opts["target_abs"], (int, float)) or opts["target_abs"] < 0
-    ):
+    if opts["target_abs"] is not None and (not isinstance(opts["target_abs"], (int, float)) or opts["target_abs"] < 0):
         raise ReportError(f"target_abs: expected a non-negative number, got {opts['target_abs']!r}")
     return opts
 
