@@ -221,11 +221,17 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     if cfg.get("checkpoint", True):
         path = outdir / JOURNAL_NAME
         if replay is not None:
-            journal = EvaluationJournal.reopen(path, replay)
+            journal = EvaluationJournal.reopen(path, replay)  # the cut-off tail is dropped here
         else:
             journal = EvaluationJournal.create(path, _journal_header(cfg, problem, budget, fingerprint))
 
     budgeted = BudgetedProblem(problem, budget, journal=journal, replay=replay.records if replay else None)
+    if replay is not None:
+        try:
+            budgeted.verify_replay()
+        except ResumeError:
+            journal.close()
+            raise
     try:
         result = run_plugin(plugin, budgeted, seed=seed, name=name, time_limit_s=cfg.get("time_limit_s"),
                             record_failures=True)

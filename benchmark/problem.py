@@ -181,7 +181,6 @@ class BudgetedProblem:
         self.journal = journal
         #: resume: journaled batches a deterministic plugin will ask for again, in order
         self._replay: deque[JournalRecord] = deque(replay or ())
-        self._replay_checked = False
         self.replayed_batches = 0
         self.replayed_evaluations = 0
         self.replay_mismatch: dict | None = None
@@ -261,8 +260,6 @@ class BudgetedProblem:
         rec = self._replay[0]
         if rec.kind == kind and rec.X.shape == X.shape and rec.X.tobytes() == X.tobytes():
             self._replay.popleft()
-            if kind == KIND_EVALUATE and not self._replay_checked:
-                self._verify_replay(rec)
             self.replayed_batches += 1
             self.replayed_evaluations += len(X)
             if self.journal is not None:
@@ -286,18 +283,27 @@ class BudgetedProblem:
             self.journal.truncate_here()
         return None
 
-    def _verify_replay(self, rec: JournalRecord) -> None:
-        """Simulate the first journaled point again: a different cost means the data or the
-        code changed since the journal was written, and replaying it would be wrong."""
+    def verify_replay(self) -> None:
+        """Before the plugin starts: simulate the first journaled point again. A different cost
+        means the data or the code changed since the journal was written, and replaying it
+        would be wrong (ResumeError). Not counted as an evaluation."""
         from benchmark.errors import ResumeError
 
-        self._replay_checked = True
-        c = float(np.asarray(self.problem.evaluate(rec.X[:1]), dtype=float).reshape(-1)[0])
+        if not self._replay:
+            return
+        rec = self._replay[0]
+        x = rec.X[:1]
+        if rec.kind == KIND_EVALUATE:
+            c = float(np.asarray(self.problem.evaluate(x), dtype=float).reshape(-1)[0])
+        else:
+            r = np.asarray(self.problem.residuals(x[0]), float)
+            c = self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else math.inf
         c = math.inf if math.isnan(c) else c
         if np.float64(c).tobytes() != np.float64(rec.cost[0]).tobytes():
             raise ResumeError(
-                f"resume: the journal's first cost {rec.cost[0]!r} differs from the same point simulated now "
-                f"({c!r}): the data or the code changed since the checkpoint; start afresh with resume=false"
+                f"resume: the journal's first cost {rec.cost[0]!r} differs from the same point simulated "
+                f"now ({c!r}): the data or the code changed since the checkpoint; start afresh with "
+                "resume=false"
             )
 
     @property
