@@ -164,9 +164,7 @@ def _effects_plant(cfg, params, test, thermal_cfg, voltages, f, p) -> dict | Non
             target_rise = session["target_rise_K"]
             if not session.get("cooling", True):
                 thermal_cfg |= {"conductance_standstill": 0.0, "conductance_at_speed": 0.0}
-        injected.append(
-            {"name": name, "size": size, "size_name": eff.size_name, "unit": eff.size_unit, "form": form}
-        )
+        injected.append({"name": name, "size": size, "size_name": eff.size_name, "unit": eff.size_unit, "form": form})
     return {
         "params": bare,
         "test": test,
@@ -178,9 +176,7 @@ def _effects_plant(cfg, params, test, thermal_cfg, voltages, f, p) -> dict | Non
     }
 
 
-def _thermal_for_rise(
-    session_temperatures, thermal: ThermalModel, theta0: float, rise: float
-) -> ThermalModel:
+def _thermal_for_rise(session_temperatures, thermal: ThermalModel, theta0: float, rise: float) -> ThermalModel:
     """The thermal model with its capacitance scaled so that the winding temperature rises by
     ``rise`` K from the first reading to the hottest (secant steps on the heating scale 1/C)."""
     from dataclasses import replace
@@ -247,9 +243,7 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
                 ambient_temperature=float(th["ambient_temperature"]),
             )
         except KeyError as exc:
-            raise ConfigError(
-                f"motor.thermal.{exc.args[0]}: needed when motor.test.warming is true"
-            ) from None
+            raise ConfigError(f"motor.thermal.{exc.args[0]}: needed when motor.test.warming is true") from None
     theta0 = float(th.get("initial_temperature", theta_ref))
 
     segs, reads, t_end = _schedule(test, voltages)
@@ -279,9 +273,7 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
                 n, V = segs[-1][3], 0.0
             P = 0.0
             if V > 0:
-                op = operating_point(
-                    params.at_temperature(theta[i], theta_ref), slip_from_speed(n, f, p), V, f, p
-                )
+                op = operating_point(params.at_temperature(theta[i], theta_ref), slip_from_speed(n, f, p), V, f, p)
                 P = float(op.P_in - op.P_mech)
             theta[i + 1] = thermal.step(theta[i], P, n, grid[i + 1] - grid[i])
         return np.interp(t_read, grid, theta), float(np.interp(t_after, grid, theta))

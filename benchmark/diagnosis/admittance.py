@@ -60,8 +60,8 @@ class AdmittanceDiagnosisSettings:
     noise_floor : lower bound of the estimated noise, as a fraction of the full scale.
     """
 
-    min_gap: float = 1.5
-    min_heldout_reduction: float = 0.1
+    min_gap: float = 0.0
+    min_heldout_reduction: float = 0.05
     fit_evaluations: int = 300
     near_synchronism: float = 0.12
     noise: float | None = None
@@ -115,9 +115,8 @@ class SweepData:
         return len(self.s)
 
     def folds(self) -> tuple[str, list[np.ndarray]]:
-        """Held-out folds (masks over the readings) and what they are."""
-        if len(self.levels) >= 2:
-            return "voltage_level", [self.level == j for j in range(len(self.levels))]
+        """Held-out folds (masks over the readings) and what they are: each sweep table (a
+        voltage level's up- or down-sweep) when there are several, else interleaved readings."""
         tables = np.unique(self.sweep)
         if len(tables) >= 2:
             return "sweep_table", [self.sweep == k for k in tables]
@@ -158,8 +157,9 @@ def noise_estimate(data: SweepData, residual: np.ndarray, floor: float) -> dict[
 class SweepModel:
     """Base circuit (``R1t, X, R2, R0, X0``; ``X1 = X2 = X``) plus one effect's extras."""
 
-    def __init__(self, data: SweepData, effect: AdmittanceEffect | None, ctx: SweepContext):
+    def __init__(self, data: SweepData, effect: AdmittanceEffect | None, ctx: SweepContext, base_bounds):
         self.data = data
+        self.base_bounds = base_bounds
         self.effect = effect
         self.ctx = ctx
         self.extra_names = tuple(effect.extra_names) if effect is not None else ()
@@ -197,18 +197,15 @@ class SweepModel:
         r = self.residuals(x, mask)
         return float(r @ r)
 
-    def bounds(self, x_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        lo = np.concatenate([x_base[:5] * 0.25, np.zeros(0)])
-        hi = np.concatenate([x_base[:5] * 4.0, np.zeros(0)])
-        lo[3] = 0.0  # R0 may vanish
-        hi[3] = max(hi[3], 0.2 * x_base[4])
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.base_bounds
         if self.effect is not None:
             elo, ehi = self.effect.extra_bounds(self.ctx)
             lo, hi = np.concatenate([lo, elo]), np.concatenate([hi, ehi])
         return lo, hi
 
-    def fit(self, x0: np.ndarray, mask, max_nfev: int, x_base: np.ndarray | None = None) -> np.ndarray:
-        lo, hi = self.bounds(x_base if x_base is not None else x0)
+    def fit(self, x0: np.ndarray, mask, max_nfev: int) -> np.ndarray:
+        lo, hi = self.bounds()
         span = hi - lo
         u0 = np.clip((np.asarray(x0, float) - lo) / span, 1e-9, 1 - 1e-9)
         sol = least_squares(
@@ -225,18 +222,37 @@ class SweepModel:
         return lo + sol.x * span
 
 
-def base_start(data: SweepData) -> np.ndarray:
-    """The base circuit from the bilinear regression (tie X1 = X2), weighted by the full scale."""
+def _model_a(data: SweepData) -> tuple[complex, complex]:
+    """Impedances read at standstill (series branches) and at synchronism (magnetising branch)."""
+    near1 = np.abs(data.s - 1.0) <= np.min(np.abs(data.s - 1.0)) + 1e-9
+    near0 = np.abs(data.s) <= np.min(np.abs(data.s)) + 1e-9
+    return complex(np.mean(1.0 / data.Y[near1])), complex(np.mean(1.0 / data.Y[near0]))
+
+
+def base_bounds(data: SweepData) -> tuple[np.ndarray, np.ndarray]:
+    """Search ranges of ``R1t, X, R2, R0, X0`` from model A's crude reading, a decade either side."""
+    Zsc, Znl = _model_a(data)
+    R, X = abs(Zsc.real) / 2, abs(Zsc.imag) / 2
+    X0 = max(abs(Znl.imag) - X, 2 * X)
+    lo = np.array([R / 10, X / 10, R / 10, 0.0, X0 / 10])
+    hi = np.array([10 * R, 10 * X, 10 * R, 10 * max(abs(Znl.real), R), 10 * X0])
+    return lo, hi
+
+
+def base_starts(data: SweepData, bounds) -> list[np.ndarray]:
+    """Starts of the base fit: the bilinear regression (tie X1 = X2) and model A's crude reading."""
+    lo, hi = bounds
+    starts = []
     reg = bilinear_regression(data.s, data.Y, np.full(data.n, 1.0 / data.full_scale), model=6)
-    t = reg["tied"]
-    x = np.array([t["R1_total"], t["X1"], t["R2"], t["R0"], t["X0"]], float)
-    # a non-physical regression (tiny data sets, heavy noise): fall back to model A's crude reading
-    if not np.all(np.isfinite(x)) or np.any(x[[0, 1, 2, 4]] <= 0) or x[3] < 0:
-        Zsc = 1.0 / data.Y[np.argmin(np.abs(data.s - 1.0))]
-        Znl = 1.0 / data.Y[np.argmin(np.abs(data.s))]
-        R, X = abs(Zsc.real) / 2, abs(Zsc.imag) / 2
-        x = np.array([R, X, R, max(abs(Znl.real) - R, 1e-3), max(abs(Znl.imag) - X, 10 * X)])
-    return x
+    for key in ("tied", "free"):
+        t = reg[key]
+        x = np.array([t["R1_total"], 0.5 * (t["X1"] + t["X2"]), t["R2"], t["R0"], t["X0"]], float)
+        if np.all(np.isfinite(x)) and np.all(x >= lo) and np.all(x <= hi):
+            starts.append(x)
+    Zsc, Znl = _model_a(data)
+    R, X = abs(Zsc.real) / 2, abs(Zsc.imag) / 2
+    starts.append(np.clip([R, X, R, max(abs(Znl.real) - R, 0.0), max(abs(Znl.imag) - X, 2 * X)], lo, hi))
+    return starts
 
 
 def sweep_context(data: SweepData, x_base: np.ndarray) -> SweepContext:
@@ -306,10 +322,10 @@ def _directions(d: SweepData) -> dict[str, np.ndarray]:
 # ----------------------------------------------------------------------------- the diagnosis
 
 
-def _best_fit(model: SweepModel, starts, mask, settings, x_base):
+def _best_fit(model: SweepModel, starts, mask, max_nfev: int):
     best, best_ssr = None, np.inf
     for x0 in starts:
-        x = model.fit(x0, mask, settings.fit_evaluations, x_base)
+        x = model.fit(x0, mask, max_nfev)
         v = model.ssr(x, mask)
         if v < best_ssr:
             best, best_ssr = x, v
@@ -328,10 +344,10 @@ def diagnose_sweep(
     n_res = 2 * data.n
     # 1. base identification (in full-scale units until the noise is known)
     data.sigma = data.full_scale
-    x_start = base_start(data)
-    base = SweepModel(data, None, SweepContext(E_top=1.0, I_stall=1.0))
-    x_base = base.fit(x_start, None, 4 * settings.fit_evaluations, x_start)
-    x_base = base.fit(x_base, None, 4 * settings.fit_evaluations, x_base)
+    bounds = base_bounds(data)
+    base = SweepModel(data, None, SweepContext(E_top=1.0, I_stall=1.0), bounds)
+    x_base, _ = _best_fit(base, base_starts(data, bounds), None, 4 * settings.fit_evaluations)
+    x_base = base.fit(x_base, None, 4 * settings.fit_evaluations)
     # 2. noise
     r_fs = base.residual_complex(x_base) * data.sigma
     sig = noise_estimate(data, r_fs, settings.noise_floor)
@@ -339,11 +355,11 @@ def diagnose_sweep(
         sig = {"G": float(settings.noise), "B": float(settings.noise)}
     data.sigma = math.sqrt(0.5 * (sig["G"] ** 2 + sig["B"] ** 2))
     ctx = sweep_context(data, x_base)
-    base = SweepModel(data, None, ctx)
+    base = SweepModel(data, None, ctx, bounds)
     # 3. localisation
     loc = localise(base, x_base, settings.near_synchronism)
     fold_kind, folds = data.folds()
-    base_fold = [base.fit(x_base, ~m, settings.fit_evaluations, x_base) for m in folds]
+    base_fold = [base.fit(x_base, ~m, settings.fit_evaluations) for m in folds]
     held_base = sum(base.ssr(xf, m) for xf, m in zip(base_fold, folds, strict=True))
     ins_base = base.ssr(x_base)
     # 4. candidates
@@ -351,14 +367,14 @@ def diagnose_sweep(
     for eff in effects.values():
         if progress:
             progress(eff.name)
-        model = SweepModel(data, eff, ctx)
+        model = SweepModel(data, eff, ctx, bounds)
         starts = [np.concatenate([x_base, e]) for e in eff.extra_starts(ctx)]
-        x_full, ssr_full = _best_fit(model, starts, None, settings, x_base)
+        x_full, ssr_full = _best_fit(model, starts, None, settings.fit_evaluations)
         held_aug = 0.0
         xs = []
         for xf, m in zip(base_fold, folds, strict=True):
             st = [np.concatenate([xf, e]) for e in eff.extra_starts(ctx)] + [x_full]
-            xk, _ = _best_fit(model, st, ~m, settings, x_base)
+            xk, _ = _best_fit(model, st, ~m, settings.fit_evaluations)
             xs.append(xk)
             held_aug += model.ssr(xk, m)
         criterion = 0.5 * (ssr_full - ins_base) + model.k * math.log(n_res)
@@ -377,9 +393,7 @@ def diagnose_sweep(
     ranking.sort(key=lambda r: -r["heldout_reduction"])
     # 5. verdict
     gap = held_base / n_res
-    earned = [
-        r for r in ranking if r["criterion"] < 0 and r["heldout_reduction"] >= settings.min_heldout_reduction
-    ]
+    earned = [r for r in ranking if r["criterion"] < 0 and r["heldout_reduction"] >= settings.min_heldout_reduction]
     verdict = earned[0]["effect"] if (gap >= settings.min_gap and earned) else "none"
     held_after = gap if verdict == "none" else earned[0]["heldout_chi2_after"]
     doc = {
@@ -574,8 +588,7 @@ def sweep_figures(models: dict, doc: dict, outdir) -> list[str]:
     axes[0].legend(fontsize=6, ncol=2)
     axes[1].set_xlabel("slip")
     axes[0].set_title(
-        f"Residual map: braking s > 1, motoring, near synchronism, generating s < 0; "
-        f"verdict {doc['verdict']}",
+        f"Residual map: braking s > 1, motoring, near synchronism, generating s < 0; verdict {doc['verdict']}",
         fontsize=8,
     )
     fig.tight_layout()

@@ -215,9 +215,7 @@ class AdmittanceEffect(Effect):
         """Changes to the bench session (the generator's ``motor.test``/``thermal`` keys)."""
         return {}
 
-    def plant(
-        self, circuit: SweepCircuit, size: float, ctx: SweepContext, form: dict | None = None
-    ) -> SweepCircuit:
+    def plant(self, circuit: SweepCircuit, size: float, ctx: SweepContext, form: dict | None = None) -> SweepCircuit:
         raise NotImplementedError
 
     def augment(self, circuit: SweepCircuit, extras: np.ndarray, ctx: SweepContext) -> SweepCircuit:
@@ -354,9 +352,7 @@ class DoubleCage(AdmittanceEffect):
                 )
             rotor = _two_cages(brentq(rise, 1e-7, grid[k]), s_c)
         else:
-            raise ValueError(
-                f"effect_form.double_cage.kind: double_cage, deep_bar or quadratic, got {kind!r}"
-            )
+            raise ValueError(f"effect_form.double_cage.kind: double_cage, deep_bar or quadratic, got {kind!r}")
         return circuit.with_(rotor=_with_lb_terms(rotor, circuit))
 
     def extra_bounds(self, ctx):
@@ -543,13 +539,16 @@ class LeakageSaturation(AdmittanceEffect):
     ``slip`` (default, L&B's ``X2 - X3|s|`` with ``X3 = size*X2``) or ``current`` (X1 and X2
     fall with their own branch current, ``1/(1 + c (|I|/I_stall)^exponent)``, exponent 2).
 
-    Augmentation: L&B's ``-X3|s|`` in the rotor, extra ``X3_pu`` = X3/X2.
+    Augmentation: both drivers, L&B's ``-X3|s|`` in the rotor and a fall of X1, X2 with their
+    branch currents ``1/(1 + c (|I|/I_stall)^2)``: extras ``X3_pu`` = X3/X2 and ``ls_fall`` =
+    ``c/(1 + c)`` (the fall at the standstill current of the top level). The current-driven
+    part is what makes the effect differ between voltage levels.
     """
 
     name = "leakage_saturation"
     size_name = "leakage_fall_at_standstill"
     realistic = (0.01, 0.06)
-    extra_names = ("X3_pu",)
+    extra_names = ("X3_pu", "ls_fall")
     physics = "leakage reactance falls at high current (L&B: X2 - X3|s|)"
     shows_in = "susceptance at large slip (B too small at s = 2, too large near synchronism)"
 
@@ -579,13 +578,23 @@ class LeakageSaturation(AdmittanceEffect):
         raise ValueError(f"effect_form.leakage_saturation.kind: slip or current, got {kind!r}")
 
     def extra_bounds(self, ctx):
-        return np.array([-0.05]), np.array([0.15])
+        return np.array([-0.05, -0.1]), np.array([0.15, 0.3])
 
     def extra_starts(self, ctx):
-        return [np.array([0.005])]
+        return [np.array([0.01, 0.0]), np.array([0.0, 0.02])]
 
     def augment(self, circuit, extras, ctx):
-        return circuit.with_(X3=float(extras[0]) * circuit.X2)
+        out = circuit.with_(X3=float(extras[0]) * circuit.X2)
+        f = float(extras[1])
+        if f == 0.0:
+            return out
+        c = f / (1.0 - f)
+        I_ref = ctx.I_stall
+
+        def leak(I1, I2):
+            return 1.0 / (1.0 + c * (I1 / I_ref) ** 2), 1.0 / (1.0 + c * (I2 / I_ref) ** 2)
+
+        return out.with_(leak_of_i=leak)
 
 
 class LeakageCoreLoss(AdmittanceEffect):
