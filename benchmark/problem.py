@@ -184,6 +184,8 @@ class BudgetedProblem:
         self.replayed_batches = 0
         self.replayed_evaluations = 0
         self.replay_mismatch: dict | None = None
+        self._critical = 0  # > 0 while a batch is being simulated, journaled and counted
+        self._timeout_pending = False
 
     # what plugins read
     @property
@@ -226,14 +228,29 @@ class BudgetedProblem:
         if n_run:
             self.check_time()
             Xr = np.ascontiguousarray(X[:n_run])
-            c = self._replayed(KIND_EVALUATE, Xr)
-            if c is None:
-                c = np.asarray(self.problem.evaluate(Xr), dtype=float).reshape(n_run)
-                c = np.where(np.isnan(c), np.inf, c)
-                self._journal(KIND_EVALUATE, Xr, c)
-            cost[:n_run] = c
-            self._record(Xr, c)
+            with self._counting():
+                c = self._replayed(KIND_EVALUATE, Xr)
+                if c is None:
+                    c = np.asarray(self.problem.evaluate(Xr), dtype=float).reshape(n_run)
+                    c = np.where(np.isnan(c), np.inf, c)
+                    self._journal(KIND_EVALUATE, Xr, c)
+                cost[:n_run] = c
+                self._record(Xr, c)
         return cost
+
+    @contextlib.contextmanager
+    def _counting(self):
+        """Simulating, journaling and counting a batch is one step: a time-limit alarm that
+        arrives meanwhile is held until the batch is counted (so the journal, the count and the
+        history agree), then raised."""
+        self._critical += 1
+        try:
+            yield
+        finally:
+            self._critical -= 1
+        if self._critical == 0 and self._timeout_pending:
+            self._timeout_pending = False
+            raise TimeLimitExceeded(self._time_message())
 
     def check_time(self) -> None:
         """Raise TimeLimitExceeded once the run's deadline has passed (called before every
@@ -325,16 +342,17 @@ class BudgetedProblem:
         X = np.ascontiguousarray(x[None, :])
         # residual vectors are not journaled (too large): a resumed run checks the point and
         # simulates it again
-        n_before = self.replayed_batches
-        if self._replay:
-            self._replayed(KIND_RESIDUALS, X)
-        replayed = self.replayed_batches > n_before
-        r = np.asarray(self.problem.residuals(x), float)
-        # the harness scores every evaluation by the problem's own cost, not the sum of squares
-        cost = self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
-        if not replayed:
-            self._journal(KIND_RESIDUALS, X, np.array([cost]))
-        self._record(X, np.array([cost]))
+        with self._counting():
+            n_before = self.replayed_batches
+            if self._replay:
+                self._replayed(KIND_RESIDUALS, X)
+            replayed = self.replayed_batches > n_before
+            r = np.asarray(self.problem.residuals(x), float)
+            # the harness scores every evaluation by the problem's own cost, not the sum of squares
+            cost = self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
+            if not replayed:
+                self._journal(KIND_RESIDUALS, X, np.array([cost]))
+            self._record(X, np.array([cost]))
         return r
 
     def residuals_batch(self, X: np.ndarray) -> np.ndarray:
@@ -344,16 +362,17 @@ class BudgetedProblem:
         if len(X) > self.remaining:
             raise BudgetExhausted(f"budget of {self.budget} evaluations spent")
         self.check_time()
-        n_before = self.replayed_batches
-        if self._replay:
-            self._replayed(KIND_RESIDUALS, X)
-        replayed = self.replayed_batches > n_before
-        R = np.asarray(self.problem.residuals_batch(X), float)
-        cost = np.array([self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
-                         for r in R])
-        if not replayed:
-            self._journal(KIND_RESIDUALS, X, cost)
-        self._record(X, cost)
+        with self._counting():
+            n_before = self.replayed_batches
+            if self._replay:
+                self._replayed(KIND_RESIDUALS, X)
+            replayed = self.replayed_batches > n_before
+            R = np.asarray(self.problem.residuals_batch(X), float)
+            cost = np.array([self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
+                             for r in R])
+            if not replayed:
+                self._journal(KIND_RESIDUALS, X, cost)
+            self._record(X, cost)
         return R
 
     def _record(self, X: np.ndarray, c: np.ndarray) -> None:
@@ -545,9 +564,13 @@ def time_limit(seconds: float | None, budgeted: BudgetedProblem | None = None):
     armed = [True]
 
     def on_alarm(signum, frame):
-        if armed[0]:
-            armed[0] = False
-            raise TimeLimitExceeded(message())
+        if not armed[0]:
+            return
+        armed[0] = False
+        if budgeted is not None and budgeted._critical:
+            budgeted._timeout_pending = True  # raised once the batch in flight is counted
+            return
+        raise TimeLimitExceeded(message())
 
     if use_signal:
         previous = signal.signal(signal.SIGALRM, on_alarm)
@@ -559,6 +582,8 @@ def time_limit(seconds: float | None, budgeted: BudgetedProblem | None = None):
         yield
     finally:
         armed[0] = False
+        if budgeted is not None:
+            budgeted._timeout_pending = False
         if use_signal:
             signal.setitimer(signal.ITIMER_REAL, 0)
             signal.signal(signal.SIGALRM, previous if previous is not None else signal.SIG_DFL)

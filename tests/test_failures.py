@@ -268,20 +268,36 @@ def test_plugin_that_returns_nan_is_a_failed_run(tmp_path, target, expected):
     assert expected in rec["message"]
 
 
+class _Toy:
+    name, parameter_names, n_var = "toy", ("a",), 1
+    lower, upper = np.zeros(1), np.ones(1)
+    has_residuals = False
+
+    def __init__(self, sleep=0.0):
+        self.sleep, self.simulated = sleep, 0
+
+    def evaluate(self, X):
+        time.sleep(self.sleep)
+        self.simulated += len(X)
+        return X[:, 0]
+
+
+def test_alarm_during_a_simulation_counts_the_batch_first():
+    """SIGALRM arriving while a batch is simulated is held until the batch is counted: every
+    simulated point is in the count, the history and the best point."""
+    toy = _Toy(sleep=0.2)
+    bp = BudgetedProblem(toy, 10**6)
+    res = run_plugin(plugin_keeps_evaluating, bp, seed=0, name="toy", time_limit_s=0.5)
+    assert res.status == Status.TIMEOUT
+    assert res.nfev == toy.simulated == 3  # the alarm came during the third simulation
+    assert bp.history.evaluations[-1] <= 3
+
+
 def test_run_plugin_keeps_propagating_by_default():
     """Direct callers of run_plugin (experiments, tests) still see the plugin's exception."""
-
-    class P:
-        name, parameter_names, n_var = "p", ("a",), 1
-        lower, upper = np.zeros(1), np.ones(1)
-        has_residuals = False
-
-        def evaluate(self, X):
-            return X[:, 0]
-
     with pytest.raises(RuntimeError, match="deliberate"):
-        run_plugin(plugin_raises, BudgetedProblem(P(), 10), seed=0, name="x")
-    res = run_plugin(plugin_raises, BudgetedProblem(P(), 10), seed=0, name="x", record_failures=True)
+        run_plugin(plugin_raises, BudgetedProblem(_Toy(), 10), seed=0, name="x")
+    res = run_plugin(plugin_raises, BudgetedProblem(_Toy(), 10), seed=0, name="x", record_failures=True)
     assert res.status == Status.FAILED and res.nfev == 7 and "deliberate" in res.message
 
 
