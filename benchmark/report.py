@@ -395,12 +395,13 @@ def winners(rows: list[Row], opts: dict) -> dict[str, list[str]]:
 
 
 def _ranking(rows: list[Row], key: str, what: str) -> str:
-    """'**best** (what X, tied with ...; next other, Y)' over rows sorted by values[key]."""
+    """The sentence '**best** (what X, tied with ...; next other, Y)' over rows sorted by values[key];
+    values within 1e-6 (relative) of the best are ties (the same optimum found by other methods)."""
     rows = sorted(rows, key=lambda r: r.values[key])
     best = rows[0].values[key]
 
     def same(x):
-        return abs(x - best) <= 1e-9 * max(abs(x), abs(best))
+        return abs(x - best) <= 1e-6 * max(abs(x), abs(best))
 
     tied = [r.algorithm for r in rows[1:] if same(r.values[key])]
     rest = [r for r in rows[1:] if not same(r.values[key])]
@@ -590,10 +591,10 @@ def render_tex(rows: list[Row], opts) -> str:
 
 
 # -- figures --------------------------------------------------------------------------------------
-def _grid(runs: list[Run], n=300) -> np.ndarray:
+def _grid(runs: list[Run], n=400) -> np.ndarray:
+    """Evaluation counts at which curves are drawn: n log-spaced whole numbers up to the longest run."""
     top = max([r.total_evals for r in runs] + [int(r.evals[-1]) for r in runs if len(r.evals)] + [1])
-    pts = np.unique(np.concatenate([np.geomspace(1, top, n), *[r.evals for r in runs if len(r.evals)]]))
-    return pts[pts >= 1]
+    return np.unique(np.round(np.geomspace(1, top, n)))
 
 
 def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]:
@@ -624,7 +625,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         }
 
         # convergence: median and quartiles of the best cost over the runs
-        fig, ax = plt.subplots(figsize=(7, 4.5))
+        fig, ax = plt.subplots(figsize=(9, 4.5))
         positive = True
         for row in grp:
             color, ls = style[row.algorithm]
@@ -648,7 +649,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         ax.set_ylabel(f"best cost so far (cost units of {grp[0].runs[0].rec['problem']})")
         ax.set_title(f"{group}: median and quartiles over runs", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # outside: curves stay visible
         fig.tight_layout()
         for ext in ("png", "svg"):
             fig.savefig(figdir / f"convergence_{slug}.{ext}", dpi=130)
@@ -656,7 +657,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         made[group]["convergence"] = f"figures/convergence_{slug}.png"
 
         # ECDF of (run, target) pairs
-        fig, ax = plt.subplots(figsize=(7, 4.5))
+        fig, ax = plt.subplots(figsize=(9, 4.5))
         for row in grp:
             hits = np.array([r.evals_to(t) for r in row.runs for t in inst[(r.group, r.instance)].ecdf_targets()])
             frac = np.array([np.mean(hits <= e) for e in grid])
@@ -675,11 +676,11 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         ax.set_ylabel("fraction of (run, target) pairs reached (-)")
         ax.set_title(
             f"{group}: ECDF over {ECDF_TARGETS} targets per instance, f* + D, "
-            f"D from the cost range down to {ECDF_FINEST:g} |f*|",
+            f"D from the cost range down to {ECDF_FINEST:g} max(|f*|, {NEGLIGIBLE:g} range)",
             fontsize=9,
         )
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # outside: curves stay visible
         fig.tight_layout()
         for ext in ("png", "svg"):
             fig.savefig(figdir / f"ecdf_{slug}.{ext}", dpi=130)
