@@ -17,8 +17,9 @@ step has compile-time strides, no aliasing question and no branches (Coulomb fri
 stiction and the divergence test are selects): LLVM turns it into SIMD code (8 float64 lanes
 with AVX-512, 4 with AVX2). Chunks are grouped into one block of nearly equal size per thread
 (``numba.get_num_threads()``, set with ``numba.set_num_threads``); the compiled block
-functions release the GIL and run on a small thread pool (no ``parallel=True``: plain
-``nogil`` functions compile in about half the time, see ``python -m benchmark.perf``).
+functions release the GIL and run on a small thread pool (rather than ``parallel=True``: the
+plain ``nogil`` functions compile faster than a ``prange`` driver, and calls from several Python
+threads at once are safe).
 Nothing is allocated per step, everything is cached on disk (``cache=True``).
 
 Every lane performs exactly the floating-point operations of the one-candidate RK4 step
@@ -299,6 +300,8 @@ def _executor(workers: int) -> ThreadPoolExecutor:
     with _pool_lock:
         st = _pool_state
         if st["pool"] is None or st["pid"] != os.getpid() or st["workers"] < workers:
+            if st["pool"] is not None and st["pid"] == os.getpid():
+                st["pool"].shutdown(wait=False)
             st.update(pool=ThreadPoolExecutor(max_workers=workers, thread_name_prefix="imbench-sim"),
                       pid=os.getpid(), workers=workers)
         return st["pool"]
