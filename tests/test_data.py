@@ -115,3 +115,17 @@ def test_truth_yaml_written_by_generator(tmp_path):
     assert truth["parameters"]["Rs"] == 4.96434
     ds = load_startup_dataset(out)
     assert ds.input_hold == "zoh" and len(ds.startups[0].t) == 12000 and ds.stops
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("parameters: [1, 2\n", "not valid YAML"),
+    ("- 1\n- 2\n", "needs a mapping 'parameters'"),
+    ("parameters:\n  Rs: abc\n", "parameters.Rs must be a number"),
+])
+def test_malformed_truth_yaml_is_a_clear_data_error(tmp_path, text, expected):
+    from benchmark.costs.timedomain import read_truth_for_scoring
+
+    (tmp_path / "truth.yaml").write_bytes(text.encode())
+    with pytest.raises(DataError) as err:
+        read_truth_for_scoring(tmp_path)
+    assert expected in str(err.value) and "truth.yaml" in str(err.value)

@@ -23,7 +23,7 @@ import yaml
 from benchmark.costs.mechanical import MechanicalEstimate, fit_free_stop
 from benchmark.data.conditioning import zero_phase_lowpass
 from benchmark.data.startup import StartupDataset, load_startup_dataset
-from benchmark.errors import ConfigError
+from benchmark.errors import ConfigError, DataError
 from benchmark.model.motor import PARAMETER_NAMES, coefficients
 from benchmark.model.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
 from benchmark.problem import Problem
@@ -362,12 +362,28 @@ def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
 
 
 def read_truth_for_scoring(folder) -> dict | None:
-    """The true parameters of a synthetic data set, read only to score errors."""
+    """The true parameters of a synthetic data set, read only to score errors.
+
+    A malformed truth.yaml only costs the scoring: it raises DataError naming the file, since
+    a user who put it there expects errors to be scored."""
     path = Path(folder) / "truth.yaml"
     if not path.is_file():
         return None
-    doc = yaml.safe_load(path.read_text())
-    params = (doc or {}).get("parameters")
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
+    except (yaml.YAMLError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise DataError(path, f"not valid YAML: {str(exc).splitlines()[0]}") from None
+    params = doc.get("parameters") if isinstance(doc, dict) else None
     if not isinstance(params, dict):
-        return None
-    return {k: float(v) for k, v in params.items() if k in PARAMETER_NAMES and math.isfinite(float(v))}
+        raise DataError(path, "needs a mapping 'parameters' of true values (or remove the file)")
+    out = {}
+    for k, v in params.items():
+        if k not in PARAMETER_NAMES:
+            continue
+        try:
+            value = float(v)
+        except (TypeError, ValueError):
+            raise DataError(path, f"parameters.{k} must be a number, got {v!r}") from None
+        if math.isfinite(value):
+            out[k] = value
+    return out
