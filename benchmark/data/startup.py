@@ -5,6 +5,12 @@ Start-up columns: ``t``; voltages ``v_alpha, v_beta`` or phase ``v_r, v_s, v_t``
 ``i_alpha, i_beta`` or phase ``i_r, i_s`` (the third from a zero sum); ``speed``, mechanical
 rad/s. Phase quantities are turned into alpha-beta with the amplitude-invariant Clarke
 transform (:func:`benchmark.model.experiment.clarke`). Stop columns: ``t``, ``speed``.
+
+Each record may instead be a MATLAB file, ``startup*.mat`` / ``stop*.mat`` (versions 4 to 7),
+holding vectors named like the columns (:func:`benchmark.data.tables.read_mat_table`); a record
+name given both as ``.csv`` and ``.mat`` is refused. ``speed_unit`` in ``meta.yaml`` (``rad/s``,
+the default, or ``rpm``) says how the speed columns are written; rpm is converted on load
+(``rad/s = rpm * pi / 30``), so a data set always holds rad/s.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from benchmark.data.tables import (
     _short_repr,
     check_meta_type,
     check_time_column,
+    read_mat_table,
     read_meta,
     read_table,
     write_table_atomic,
@@ -39,7 +46,11 @@ PLAUSIBLE_SPEED_LIMIT = 1600.0
 SYNC_SPEED_MARGIN = 1.5
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
-             "inertia", "description")
+             "inertia", "speed_unit", "description")
+#: Units the speed columns may be written in (``speed_unit`` in meta.yaml; rad/s by default).
+SPEED_UNITS = ("rad/s", "rpm")
+#: File types a record may be stored in, read by these table readers.
+RECORD_READERS = {".csv": read_table, ".mat": read_mat_table}
 MAX_POLE_PAIRS = 100
 
 
@@ -128,6 +139,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     hold = meta.get("input_hold", "linear")
     if not isinstance(hold, str) or hold not in ("zoh", "linear"):
         raise DataError(meta_path, f"key 'input_hold' must be 'zoh' or 'linear', got {_short_repr(hold)}")
+    unit = _speed_unit(meta_path, meta.get("speed_unit", "rad/s"))
     optional = {}
     for key in ("dc_link_voltage", "supply_frequency", "inertia"):
         if meta.get(key) is not None:
@@ -138,11 +150,11 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
 
     startup_files = _record_files(folder, "startup")
     if not startup_files:
-        raise DataError(folder, "no startup*.csv file: a time-domain data set needs at least one start-up "
-                                "record")
-    startups = [_read_startup(f, ts, max_bytes) for f in startup_files]
-    stops = [_read_stop(f, max_bytes) for f in _record_files(folder, "stop")]
-    _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"))
+        raise DataError(folder, "no startup*.csv (or startup*.mat) file: a time-domain data set needs at least "
+                                "one start-up record")
+    startups = [_read_startup(f, ts, max_bytes, speed_unit=unit) for f in startup_files]
+    stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
+    _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
     return StartupDataset(
         pole_pairs=p,
         sample_time=ts,
@@ -155,14 +167,43 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
 
 
 def _record_files(folder: Path, prefix: str) -> list[Path]:
-    """``prefix*.csv`` in name order (also folders and broken links with such names, which
-    the table reader then reports)."""
-    return sorted(f for f in folder.glob(f"{prefix}*.csv"))
+    """``prefix*.csv`` and ``prefix*.mat`` in name order (also folders and broken links with
+    such names, which the table reader then reports). The same record name as both CSV and
+    MAT (``startup.csv`` and ``startup.mat``) is a DataError: it would be read twice."""
+    files = sorted(f for ext in RECORD_READERS for f in folder.glob(f"{prefix}*{ext}"))
+    seen: dict[str, Path] = {}
+    for f in files:
+        if f.stem in seen:
+            raise DataError(folder, f"{seen[f.stem].name} and {f.name} hold the same record: keep one of them "
+                                    "(each file is one record)")
+        seen[f.stem] = f
+    return files
 
 
-def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None) -> StartupRecord:
+def rpm_to_rad_per_s(speed) -> np.ndarray:
+    """Mechanical speed in rpm -> rad/s: ``rpm * pi / 30``."""
+    return np.asarray(speed, float) * np.pi / 30
+
+
+def _speed_unit(meta_path: Path, value) -> str:
+    """``speed_unit`` of meta.yaml: ``rad/s`` or ``rpm`` (any case), else a DataError."""
+    unit = value.strip().lower() if isinstance(value, str) else None
+    if unit not in SPEED_UNITS:
+        hint = _did_you_mean(str(value), SPEED_UNITS) if isinstance(value, str) else ""
+        raise DataError(meta_path, f"key 'speed_unit' must be one of {list(SPEED_UNITS)}, got "
+                                   f"{_short_repr(value)}{hint}")
+    return unit
+
+
+def _read_records_table(path: Path, alternatives, max_bytes: int | None):
+    reader = RECORD_READERS.get(path.suffix.lower(), read_table)
+    return reader(path, alternatives, max_bytes=max_bytes, warn_unused=True)
+
+
+def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, *,
+                  speed_unit: str = "rad/s") -> StartupRecord:
     alternatives = [("t", *v, *i, "speed") for v in VOLTAGE_COLUMNS for i in CURRENT_COLUMNS]
-    df, cols = read_table(path, alternatives, max_bytes=max_bytes, warn_unused=True)
+    df, cols = _read_records_table(path, alternatives, max_bytes)
     t = df["t"].to_numpy()
     step = check_time_column(path, t)
     if abs(step - sample_time) > 1e-3 * sample_time:
@@ -191,32 +232,38 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None) 
             k = int(np.argmax(~np.isfinite(x)))
             raise DataError(path, f"phase values too large: {name} computed from columns {source} overflows "
                                   "in the Clarke transform", row=k + 1)
-    speed = df["speed"].to_numpy()
-    _check_speed(path, speed)
+    speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
     return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed,
                          source=str(path))
 
 
-def _read_stop(path: Path, max_bytes: int | None = None) -> StopRecord:
-    df, _ = read_table(path, [("t", "speed")], max_bytes=max_bytes, warn_unused=True)
+def _read_stop(path: Path, max_bytes: int | None = None, *, speed_unit: str = "rad/s") -> StopRecord:
+    df, _ = _read_records_table(path, [("t", "speed")], max_bytes)
     t = df["t"].to_numpy()
     check_time_column(path, t)
-    speed = df["speed"].to_numpy()
-    _check_speed(path, speed)
+    speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
     return StopRecord(t=t - t[0], speed=speed, source=str(path))
 
 
-def _check_speed(path: Path, speed: np.ndarray) -> None:
+def _speed_in_rad_per_s(path: Path, speed: np.ndarray, unit: str) -> np.ndarray:
+    if unit == "rpm":
+        speed = rpm_to_rad_per_s(speed)
+    _check_speed(path, speed, unit)
+    return speed
+
+
+def _check_speed(path: Path, speed: np.ndarray, unit: str = "rad/s") -> None:
     """Hard limit: beyond :data:`PLAUSIBLE_SPEED_LIMIT` no motor of this benchmark turns."""
     k = int(np.argmax(np.abs(speed)))
     if abs(speed[k]) > PLAUSIBLE_SPEED_LIMIT:
-        raise DataError(
-            path,
-            f"speed {speed[k]:.6g} is implausible in rad/s (above {PLAUSIBLE_SPEED_LIMIT:.0f} rad/s, "
-            f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; is the column in rpm? rad/s = rpm * pi / 30)",
-            column="speed",
-            row=k + 1,
-        )
+        if unit == "rpm":
+            msg = (f"speed {speed[k] * 30 / np.pi:.6g} rpm ({speed[k]:.6g} rad/s) is implausible (above "
+                   f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; meta.yaml declares speed_unit: rpm)")
+        else:
+            msg = (f"speed {speed[k]:.6g} is implausible in rad/s (above {PLAUSIBLE_SPEED_LIMIT:.0f} rad/s, "
+                   f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; is the column in rpm? rad/s = rpm * pi / 30, "
+                   "or declare speed_unit: rpm in meta.yaml)")
+        raise DataError(path, msg, column="speed", row=k + 1)
 
 
 def synchronous_speed_estimate(rec: StartupRecord, pole_pairs: int, sample_time: float) -> float:
@@ -240,7 +287,7 @@ def synchronous_speed_estimate(rec: StartupRecord, pole_pairs: int, sample_time:
 
 
 def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
-                              supply_frequency: float | None) -> None:
+                              supply_frequency: float | None, speed_unit: str = "rad/s") -> None:
     """Speed against the synchronous speed ``2 pi f / p``: an induction motor starting on its
     supply with no driving load cannot run much above it (the start-up overshoot stays well
     below: about 20 % for an 8-pole variant of the paper motor). With ``supply_frequency`` in
@@ -272,7 +319,9 @@ def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
                f"({basis})")
         as_rpm = abs(v) * np.pi / 30
         rpm_hint = (f"; if the column is in rpm, convert it: rad/s = rpm * pi / 30 ({abs(v):.6g} rpm = "
-                    f"{as_rpm:.4g} rad/s)")
+                    f"{as_rpm:.4g} rad/s), or declare speed_unit: rpm in meta.yaml")
+        if speed_unit == "rpm":
+            rpm_hint = " (meta.yaml declares speed_unit: rpm; the speed above is after conversion)"
         if strict:
             raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
                             + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)
