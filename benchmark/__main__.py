@@ -22,6 +22,8 @@ def main(cfg) -> float | None:
     outcome = run(cfg, outdir)
     print(format_table(outcome.record))
     print(f"result: {outdir / 'result.json'}")
+    if (outcome.record.get("figures") or {}).get("report"):
+        print(f"report: {outdir / outcome.record['figures']['report']} (figures)")
     return outcome.record["cost"]
 
 

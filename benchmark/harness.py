@@ -14,6 +14,7 @@ import importlib
 import inspect
 import json
 import math
+import os
 import platform
 import sys
 import time
@@ -42,7 +43,7 @@ from benchmark.problem import (
 #: removed once ``result.json`` is written.
 JOURNAL_NAME = "journal.bin"
 #: Config keys that do not change a run's trajectory (left out of its fingerprint).
-VOLATILE_KEYS = ("resume", "checkpoint", "time_limit_s", "progress")
+VOLATILE_KEYS = ("resume", "checkpoint", "time_limit_s", "progress", "figures")
 
 RECORDED_PACKAGES = ("numpy", "scipy", "numba", "pandas", "hydra-core", "deap", "pygad", "nlopt", "cma",
                      "imbench")
@@ -91,10 +92,13 @@ def validate_config(cfg: DictConfig) -> None:
     if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
                               or not math.isfinite(limit) or limit <= 0):
         raise ConfigError(f"time_limit_s: must be a positive number of seconds or null, got {limit!r}")
-    for key in ("resume", "checkpoint", "polish"):
+    for key in ("resume", "checkpoint", "polish", "figures"):
         v = cfg.get(key)
         if v is not None and not isinstance(v, bool):
             raise ConfigError(f"{key}: must be true or false, got {v!r}")
+    progress = cfg.get("progress", "auto")
+    if not (isinstance(progress, bool) or progress == "auto"):
+        raise ConfigError(f"progress: must be auto, true or false, got {progress!r}")
     if cfg.get("resume") and cfg.get("checkpoint") is False:
         raise ConfigError("resume: needs checkpoint=true (a run without checkpoints cannot be resumed)")
     data = cfg.get("data")
@@ -232,10 +236,17 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         except ResumeError:
             journal.close()
             raise
+    bar = None
+    if progress_wanted(cfg.get("progress", "auto")):
+        bar = ProgressBar(budget, f"{problem.name}/{name}")
+        budgeted.on_evaluate = bar
     try:
         result = run_plugin(plugin, budgeted, seed=seed, name=name, time_limit_s=cfg.get("time_limit_s"),
                             record_failures=True)
     finally:
+        if bar is not None:
+            budgeted.on_evaluate = None
+            bar.close(budgeted)
         if journal is not None:
             journal.close()
     if resume_info is not None:
@@ -312,7 +323,105 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     if journal is not None:  # the result is safe: the checkpoint has served its purpose
         with contextlib.suppress(OSError):
             (outdir / JOURNAL_NAME).unlink()
+    if cfg.get("figures", True):
+        add_figures(outdir, problem, record, x_best)
     return RunOutcome(problem=problem, result=result, record=record)
+
+
+# -- figures and progress ----------------------------------------------------------------------
+def add_figures(outdir: Path, problem: Problem, record: dict, x) -> None:
+    """Figures and ``report.md`` beside ``result.json`` (:mod:`benchmark.figures`), listed in
+    ``record["figures"]``. The result is already on disk: whatever goes wrong here becomes a
+    warning in ``result.json`` and the run goes on."""
+    with warnings.catch_warnings(record=True):  # a plotting library's warnings are not the run's
+        warnings.simplefilter("always")
+        try:
+            from benchmark.figures import write_run_figures
+
+            info = write_run_figures(problem, record, x, outdir)
+        except Exception as exc:
+            info = {"report": None, "files": [], "errors": [f"{type(exc).__name__}: {exc}"]}
+    record["figures"] = info
+    record["warnings"] += [f"figure not made ({e}); the result is unaffected" for e in info.get("errors", [])]
+    with contextlib.suppress(Exception):
+        write_text_atomic(outdir / "result.json", json.dumps(record, indent=2, default=_json_default) + "\n")
+
+
+def progress_wanted(setting, *, stream=None, environ=None, multirun: bool | None = None) -> bool:
+    """Whether a run shows its progress bar: ``progress=true`` forces it and ``false`` turns it
+    off; ``auto`` shows it only where someone watches: on a terminal (``stream``, default
+    stderr, is a tty), outside CI (no ``CI`` environment variable) and outside a sweep (Hydra's
+    multirun mode)."""
+    if setting is True or setting is False:
+        return setting
+    environ = os.environ if environ is None else environ
+    if environ.get("CI"):
+        return False
+    stream = sys.stderr if stream is None else stream
+    try:
+        if not stream.isatty():
+            return False
+    except (AttributeError, ValueError, OSError):
+        return False
+    return not (_in_multirun() if multirun is None else multirun)
+
+
+def _in_multirun() -> bool:
+    try:
+        from hydra.core.hydra_config import HydraConfig
+        from hydra.types import RunMode
+
+        return HydraConfig.initialized() and HydraConfig.get().mode == RunMode.MULTIRUN
+    except Exception:
+        return False
+
+
+class ProgressBar:
+    """A tqdm bar of one run on stderr: evaluations against the budget, the best cost and the
+    estimated time left. Set as :attr:`BudgetedProblem.on_evaluate`; it redraws at most every
+    :attr:`interval` seconds, so the evaluation loop pays one clock read per batch. A bar that
+    cannot be drawn (stderr closed) goes quiet instead of failing the run."""
+
+    interval = 0.1
+
+    def __init__(self, budget: int, desc: str, file=None):
+        from tqdm import tqdm
+
+        file = file if file is not None else sys.stderr
+        try:
+            columns = os.get_terminal_size(file.fileno()).columns
+        except (AttributeError, ValueError, OSError):
+            columns = 0
+        # a terminal that reports no size (a bare pty) would hide the bar: give it one
+        width = {"dynamic_ncols": True} if columns > 0 else {"ncols": 100, "nrows": 24}
+        self._last = -math.inf
+        try:
+            self._bar = tqdm(total=int(budget), desc=desc, unit="eval", file=file, leave=False, mininterval=0.0,
+                             miniters=1, smoothing=0.1, **width)
+        except Exception:
+            self._bar = None
+
+    def __call__(self, budgeted: BudgetedProblem) -> None:
+        now = time.monotonic()
+        if now - self._last >= self.interval:
+            self._last = now
+            self._show(budgeted)
+
+    def _show(self, budgeted: BudgetedProblem) -> None:
+        if self._bar is None:
+            return
+        try:
+            self._bar.set_postfix_str(f"best {budgeted.best_cost:.5g}", refresh=False)
+            self._bar.update(min(budgeted.nfev, budgeted.budget) - self._bar.n)
+        except Exception:
+            self._bar = None
+
+    def close(self, budgeted: BudgetedProblem) -> None:
+        self._show(budgeted)
+        if self._bar is not None:
+            with contextlib.suppress(Exception):
+                self._bar.close()
+            self._bar = None
 
 
 # -- checkpoints -------------------------------------------------------------------------------
@@ -345,7 +454,7 @@ def _data_digest(path) -> str | None:
     folder = Path(str(path))
     h = hashlib.sha256()
     for f in sorted(folder.iterdir()) if folder.is_dir() else []:
-        if f.is_file() and f.suffix.lower() in (".csv", ".yaml", ".yml"):
+        if f.is_file() and f.suffix.lower() in (".csv", ".mat", ".yaml", ".yml"):
             h.update(f.name.encode() + b"\0")
             with open(f, "rb") as fh:
                 for chunk in iter(lambda fh=fh: fh.read(1 << 20), b""):

@@ -34,6 +34,7 @@ import warnings
 import zlib
 from abc import ABC, abstractmethod
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -186,6 +187,9 @@ class BudgetedProblem:
         self.replay_mismatch: dict | None = None
         self._critical = 0  # > 0 while a batch is being simulated, journaled and counted
         self._timeout_pending = False
+        #: optional ``on_evaluate(self)``, called after every counted batch (the harness sets it
+        #: for its progress bar); it must be cheap and must not raise
+        self.on_evaluate: Callable[[BudgetedProblem], None] | None = None
 
     # what plugins read
     @property
@@ -384,6 +388,8 @@ class BudgetedProblem:
             self.best_x = np.array(X[k], dtype=float)
             self.history.evaluations.append(start + k + 1)
             self.history.best_cost.append(self.best_cost)
+        if self.on_evaluate is not None:
+            self.on_evaluate(self)
 
 
 @dataclass
