@@ -481,13 +481,15 @@ def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str
               f"budget {r.get('budget')}, {r.get('wall_time_s', 0):.2f} s."
               + (f" {r['message']}" if r.get("message") and r.get("status") != "budget_spent" else ""), ""]
     est, truth, err = r.get("estimate") or {}, r.get("truth") or {}, r.get("rel_error") or {}
-    if est:
+    if est and truth:
         lines += ["| parameter | estimate | truth | error |", "|---|---|---|---|"]
         for k, v in est.items():
             t = f"{truth[k]:.6g}" if k in truth else "-"
             e = f"{100 * err[k]:+.3f} %" if k in err else "-"
             lines.append(f"| {k} | {v:.6g} | {t} | {e} |")
         lines.append("")
+    elif est:  # measured data: no truth to score against
+        lines += ["| parameter | estimate |", "|---|---|"] + [f"| {k} | {v:.6g} |" for k, v in est.items()] + [""]
     mech = info.get("mechanical")
     if mech:
         lines += [f"Free-stop pre-identification (case {mech['case']}): tau_m = {mech['tau_m']:.6g} s, "
