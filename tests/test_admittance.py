@@ -6,7 +6,6 @@ lindsay_barton plugin, which has its own tests) against the motor preset's model
 
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -210,7 +209,8 @@ def test_without_dc_resistance_only_r1_total_is_reported(tmp_path):
     assert any("R1_total = R1 + R1sigma" in n for n in p.describe()["identifiability"])
 
 
-def test_evaluate_is_vectorised_counts_invalid_as_inf_and_is_fast():
+def test_evaluate_is_vectorised_and_counts_invalid_as_inf():
+    """(Its speed is measured in ``python -m benchmark.perf``, not in a timed test.)"""
     p = setup_problem(cfg_for(f"motor.test.speed_step_rpm={4200 / 99!r}", noise="noisy"))  # 100 readings
     assert p.data.n == 100
     rng = np.random.default_rng(1)
@@ -223,13 +223,6 @@ def test_evaluate_is_vectorised_counts_invalid_as_inf_and_is_fast():
     np.testing.assert_allclose(c, row, rtol=1e-12)
     r = p.residuals(X[0])
     assert r @ r == pytest.approx(c[0], rel=1e-12) and len(r) == 200
-    best = 0.0
-    for _ in range(5):
-        t0 = time.perf_counter()
-        for _ in range(20):
-            p.evaluate(X)
-        best = max(best, 2000 / (time.perf_counter() - t0))
-    assert best > 100_000, f"{best:.0f} evaluations/s"
 
 
 def test_noise_free_eight_parameter_fit_recovers_every_identifiable_parameter():
