@@ -13,17 +13,20 @@
    from the base fit, and score it by
 
    * the **held-out** reduction of the misfit: each fold is fitted on the rest of the data
-     and scored on the fold. Folds: the **voltage levels** when the data hold several (the
-     augmentation must predict a level it has not seen: what distinguishes saturation and
-     core loss); else the **sweep tables** when there are several (an up-sweep predicts the
-     down-sweep and back: what distinguishes a warming); else **interleaved readings**
-     (even/odd along the sweep: only guards against over-fitting noise);
+     and scored on the fold. Folds: each **sweep table** when there are several (one voltage
+     level's up- or down-sweep: the held-out table differs from the fitted ones in acquisition
+     time, which is what tells a warming, and, when a level has a single table, in voltage,
+     which is what tells saturation and core loss); else **interleaved readings** (even/odd
+     along the sweep: only a guard against fitting noise). Leaving a whole voltage level out
+     was tried first and dropped: a saturation curve that is steep near the top level cannot
+     be extrapolated from the lower levels, so the right augmentation failed its held-out test;
    * the in-sample reduction, and the information criterion ``delta chi^2/2 + k ln n``
      (``k`` extra parameters, ``n`` residuals; < 0 earns the parameters).
 5. Verdict: the candidate with the largest held-out reduction among those that earn their
-   parameters and remove at least ``min_heldout_reduction`` of the held-out misfit, when the
-   base leaves a held-out gap above ``min_gap`` (chi^2 per residual; 1 = noise alone);
-   otherwise ``none``.
+   parameters and remove at least ``min_heldout_reduction`` of the held-out misfit (and, when
+   ``min_gap`` > 0, when the base leaves a held-out gap above it, chi^2 per residual; off by
+   default: with a few hundred readings the estimated noise is only good to about 10 %, and
+   the criterion is the sharper test); otherwise ``none``.
 
 It never reads ``truth.yaml``: data sets are loaded by
 :func:`benchmark.data.admittance.load_admittance`, which reads ``meta.yaml`` and the sweep
@@ -52,7 +55,7 @@ REGIONS = ("braking", "motoring", "near_synchronism", "generating")
 class AdmittanceDiagnosisSettings:
     """Knobs of the sweep diagnosis (``conf/diagnose.yaml``, block ``admittance_diagnosis``).
 
-    min_gap : base held-out chi^2 per residual above which a gap is declared (1 = noise).
+    min_gap : optional gate, base held-out chi^2 per residual (1 = noise); 0 = off (default).
     min_heldout_reduction : share of the held-out misfit a candidate must remove.
     fit_evaluations : evaluation limit of each local least-squares fit.
     near_synchronism : ``s_near``, the half-width of the near-synchronism region (slip).
