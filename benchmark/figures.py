@@ -21,6 +21,7 @@ process. The SVG files carry no date, so the same run gives the same files.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -102,13 +103,21 @@ def timedomain_plots(problem, x: np.ndarray | None, record: dict) -> list[Plot]:
     plots = []
     ds = problem.dataset
     if x is not None:
-        sims = problem.simulate(np.atleast_2d(np.asarray(x, float)))
+        sims: list = []
+
+        def simulated(j: int) -> dict:
+            """Record j simulated with the estimate (all records in one call, made on first use, so
+            that a failing simulation costs the start-up figures only)."""
+            if not sims:
+                sims.extend(problem.simulate(np.atleast_2d(np.asarray(x, float))))
+            return {"i_alpha": sims[j][0, 0], "i_beta": sims[j][0, 1], "speed": sims[j][0, 2]}
+
         many = len(ds.startups) > 1
-        for j, (rec, sim) in enumerate(zip(ds.startups, sims, strict=True)):
+        for j, rec in enumerate(ds.startups):
             suffix = f"_{j + 1}" if many else ""
             src = Path(rec.source).name if rec.source != "memory" else "synthetic record"
             meas = {"i_alpha": rec.i_alpha, "i_beta": rec.i_beta, "speed": rec.speed}
-            simd = {"i_alpha": sim[0, 0], "i_beta": sim[0, 1], "speed": sim[0, 2]}
+            simd = functools.partial(simulated, j)
             plots.append(Plot(
                 f"startup{suffix}", f"Start-up{' ' + str(j + 1) if many else ''}: measured and simulated",
                 f"Measured ({src}) and simulated currents and speed over the whole start-up with the "
@@ -132,13 +141,15 @@ def timedomain_plots(problem, x: np.ndarray | None, record: dict) -> list[Plot]:
     return plots
 
 
-def _startup_drawer(t, meas: dict, sim: dict, zoom: float | None, src: str):
+def _startup_drawer(t, meas: dict, simulated: Callable[[], dict], zoom: float | None, src: str):
     def draw(fig):
+        sim = simulated()
         axes = fig.subplots(3, 1, sharex=True)
         sel = t <= zoom if zoom is not None else slice(None)
         tt = t[sel]
         for ax, (key, label, unit) in zip(axes, CHANNELS, strict=True):
             m, s = meas[key][sel], sim[key][sel]
+            finite = np.isfinite(s)
             if zoom is not None:
                 ax.plot(tt, m, ".", color=MEASURED, ms=2.0, label="measured")
             else:
@@ -146,7 +157,11 @@ def _startup_drawer(t, meas: dict, sim: dict, zoom: float | None, src: str):
                 ax.plot(*envelope(tt, m), color="0.6", lw=2.4, label="measured")
             ax.plot(*envelope(tt, s), color=MODEL, lw=0.9, label="simulated (identified model)")
             ax.set_ylabel(label)
-            ax.set_title(f"RMS misfit {_rms(m, s):.3g} {unit}", loc="right", fontsize=8)
+            note = f"RMS misfit {_rms(m, s):.3g} {unit}"
+            if not finite.all():
+                k = int(np.argmin(finite))
+                note = f"the simulation diverged at t = {tt[k]:.4g} s" + (f" ({note} before)" if k >= 10 else "")
+            ax.set_title(note, loc="right", fontsize=8)
             ax.grid(alpha=0.3)
         axes[-1].set_xlabel("time from switch-on (s)")
         what = "first 100 ms of the start-up" if zoom is not None else "start-up"

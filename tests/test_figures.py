@@ -110,3 +110,23 @@ def test_admittance_model_curves_pass_through_the_data_at_the_truth():
     m = (len(c["model_Y"]) - 1) // (len(c["Y"]) - 1)
     np.testing.assert_allclose(c["model_Y"][::m], c["Y"], atol=1e-5 * np.abs(c["Y"]).max())
     np.testing.assert_allclose(c["model_T"][::m], c["T"], atol=1e-5 * np.abs(c["T"]).max())
+
+
+def test_diverged_or_failing_simulation_costs_only_the_start_up_figures(tmp_path):
+    from hydra.utils import instantiate
+
+    cfg = compose_config(["budget=50"])
+    problem = instantiate(cfg.problem.setup)(cfg)
+    record = {"problem": "timedomain", "optimizer": "probe", "seed": 0, "evaluations": 0, "warnings": []}
+    x = np.array([4.9, 0.1075, 1e-7, 1.5, 0.0064])  # Le -> 0: diverges at once
+    info = figures.write_run_figures(problem, record, x, tmp_path / "diverged")
+    assert info["errors"] == [] and "startup.png" in info["files"]
+
+    def boom(X):
+        raise FloatingPointError("simulator exploded")
+
+    problem.simulate = boom
+    info = figures.write_run_figures(problem, record, x, tmp_path / "failed")
+    assert info["errors"] == ["startup: FloatingPointError: simulator exploded",
+                              "startup_zoom: FloatingPointError: simulator exploded"]
+    assert info["files"] == ["stop.png", "stop.svg"]  # no history.csv here: no convergence plot
