@@ -451,6 +451,7 @@ def write_run_figures(problem, record: dict, x: np.ndarray | None, outdir) -> di
 
     t0 = time.perf_counter()
     outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
     plots, errors = figure_plots(problem, record, x, outdir)
     done = []
     for plot in plots:
