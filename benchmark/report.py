@@ -76,7 +76,7 @@ DEFAULTS = {
     "ioh": True,
 }
 #: Configuration keys that belong to the optimiser or the run, not to the problem.
-RUN_KEYS = ("optimizer", "seed", "budget", "polish", "polish_budget", "time_limit_s", "progress")
+RUN_KEYS = ("optimizer", "seed", "budget", "polish", "polish_budget", "time_limit_s", "progress", "figures")
 INSTANCE_KEY = "noise.seed"
 #: f* below this fraction of the cost range (median first cost - f*) counts as zero: target
 #: precisions are then relative to NEGLIGIBLE * range instead of |f*|.

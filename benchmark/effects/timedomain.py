@@ -25,7 +25,7 @@ class CoulombFriction(Effect):
     name = "coulomb_friction"
     size_name = "fc_over_viscous"
     realistic = (0.2, 1.5)
-    extra_names = ("fc",)
+    extra_names = ("fc_over_viscous",)
     physics = "constant friction torque fc*sign(w) (against the case-1 base without it)"
     shows_in = "stop record: straight-line tail instead of exponential; end of start-up"
 
@@ -35,12 +35,12 @@ class CoulombFriction(Effect):
         return row
 
     def extra_bounds(self, ctx):
-        return np.array([0.0]), np.array([1.0])  # scaled below: N m per unit
+        return np.array([0.0]), np.array([3.0])
 
     def augment(self, rows, extras, ctx):
         rows = rows.copy()
-        # extras in units of the viscous torque at synchronous speed
-        rows[:, IDX["fc"]] = extras[:, 0] * 3.0 * rows[:, IDX["fv"]] * ctx.w_sync
+        # the extra parameter is fc over the viscous torque at synchronous speed, like the size
+        rows[:, IDX["fc"]] = extras[:, 0] * rows[:, IDX["fv"]] * ctx.w_sync
         return rows
 
 

@@ -197,6 +197,7 @@ def sweep(opts: dict, sc: float, sw: float, extra: list[str]) -> tuple[str, floa
         *ml_overrides(sc, sw),
         f"hydra.sweep.dir={rundir}",
         f"hydra.sweep.subdir={SUBDIR}",
+        "figures=false",
         *extra,
     ]
     shown = "python " + " ".join(cmd[1:])

@@ -41,6 +41,7 @@ def main(argv: list[str]) -> str:
         for polish in ([False, True] if opts["polish_also"] == "true" else [False]):
             with initialize_config_dir(config_dir=CONF, version_base="1.3"):
                 cfg = compose("config", overrides=["+experiment=table1", f"seed={seed}", f"polish={polish}",
+                                                   "figures=false",
                                                    *overrides])
             outdir = Path(opts["rundir"]) / f"seed{seed}{'_polish' if polish else ''}"
             rec = run(cfg, outdir).record
