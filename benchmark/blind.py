@@ -31,9 +31,16 @@ FORM_CHOICES = {
 }
 
 
-def draw_sets(cfg) -> list[dict]:
-    """The n blind draws: effect (or none), size, form, motor spread and noise seed."""
-    effects = load_effects("timedomain")
+MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
+
+
+def draw_sets(cfg, problem: str = "timedomain", motor_keys=MOTOR_KEYS, form_choices=None) -> list[dict]:
+    """The n blind draws: effect (or none), size, form, motor spread and noise seed.
+
+    Each set has its own random stream (spawned from ``cfg.seed``), so a set's draw does not
+    depend on how many sets come before it."""
+    form_choices = FORM_CHOICES if form_choices is None else form_choices
+    effects = load_effects(problem)
     names = sorted(effects)
     outcomes = names + ["none"]
     weights = np.array([1.0] * len(names) + [float(cfg.none_weight)])
@@ -44,11 +51,11 @@ def draw_sets(cfg) -> list[dict]:
         effect = str(rng.choice(outcomes, p=weights / weights.sum()))
         d = {"index": i, "effect": effect, "noise_seed": int(rng.integers(2**31 - 1))}
         spread = float(cfg.vary_motor)
-        d["motor_scale"] = {k: float(np.exp(rng.uniform(-spread, spread))) for k in ("Rs", "Ls", "Le", "Rr", "J", "fv")}
+        d["motor_scale"] = {k: float(np.exp(rng.uniform(-spread, spread))) for k in motor_keys}
         if effect != "none":
             lo, hi = effects[effect].realistic
             d["size"] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-            d["form"] = FORM_CHOICES[effect](rng) if (cfg.vary_form and effect in FORM_CHOICES) else {}
+            d["form"] = form_choices[effect](rng) if (cfg.vary_form and effect in form_choices) else {}
         draws.append(d)
     return draws
 

@@ -14,7 +14,6 @@ rate on effect-free sets, median held-out gap shrinkage of correct verdicts
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -22,6 +21,7 @@ import hydra
 import numpy as np
 from omegaconf import OmegaConf, open_dict
 
+from benchmark import blind
 from benchmark.blind import render, summarise
 from benchmark.cli import run_hydra_main, user_errors
 from benchmark.data.tables import write_table_atomic, write_text_atomic, write_yaml_atomic
@@ -53,24 +53,7 @@ MOTOR_KEYS = ("R1", "R2", "X", "R0", "X0")
 
 def draw_sets(cfg) -> list[dict]:
     """The n blind draws: effect (or none), size, form, machine spread and noise seed."""
-    effects = load_effects("admittance")
-    names = sorted(effects)
-    outcomes = names + ["none"]
-    weights = np.array([1.0] * len(names) + [float(cfg.none_weight)])
-    seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
-    draws = []
-    for i, ss in enumerate(seeds):
-        rng = np.random.default_rng(ss)
-        effect = str(rng.choice(outcomes, p=weights / weights.sum()))
-        d = {"index": i, "effect": effect, "noise_seed": int(rng.integers(2**31 - 1))}
-        spread = float(cfg.vary_motor)
-        d["motor_scale"] = {k: float(np.exp(rng.uniform(-spread, spread))) for k in MOTOR_KEYS}
-        if effect != "none":
-            lo, hi = effects[effect].realistic
-            d["size"] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-            d["form"] = FORM_CHOICES[effect](rng) if (cfg.vary_form and effect in FORM_CHOICES) else {}
-        draws.append(d)
-    return draws
+    return blind.draw_sets(cfg, problem="admittance", motor_keys=MOTOR_KEYS, form_choices=FORM_CHOICES)
 
 
 def set_config(cfg, d: dict):
