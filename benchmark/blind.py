@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import hydra
@@ -130,47 +131,59 @@ def render(summary: dict, rows: list[dict], cmd: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-@hydra.main(version_base="1.3", config_path="../conf", config_name="blind")
-@user_errors
-def main(cfg) -> None:
+def run_blind(cfg, problem: str, draws: list[dict], set_config, generate, title: str, command: str) -> dict:
+    """Make, hide the truth of, and diagnose every drawn set; write the confusion matrix and
+    statistics to ``cfg.out``. Shared by the time-domain and slip-sweep evaluations."""
     from benchmark.diagnose import run_diagnosis
-    from synthetic.startup import generate
 
     work = Path(cfg.workdir)
     out = Path(cfg.out)
     rows = []
-    for d in draw_sets(cfg):
+    for d in draws:
         sc = set_config(cfg, d)
         folder = work / "sets" / f"set_{d['index']:03d}"
         generate(sc, folder)
-        truth_file = folder / "truth.yaml"
         # the truth leaves the data folder before the diagnosis sees it
         (work / "truth").mkdir(parents=True, exist_ok=True)
-        truth_file.replace(work / "truth" / f"set_{d['index']:03d}.yaml")
+        (folder / "truth.yaml").replace(work / "truth" / f"set_{d['index']:03d}.yaml")
         with open_dict(sc):
             sc.data.path = str(folder)
+            sc.effects, sc.effect_size, sc.effect_form = [], {}, {}
             sc.figures = False
         doc = run_diagnosis(sc, work / "diagnoses" / f"set_{d['index']:03d}")
         row = {"index": d["index"], "truth": d["effect"], "verdict": doc["verdict"],
                "gap_before": doc["gap_before"]["heldout_rms_over_noise"],
-               "gap_after": doc["gap_after"]["heldout_rms_over_noise"]}
+               "gap_after": doc["gap_after"]["heldout_rms_over_noise"],
+               "ranking": [{k: r[k] for k in ("effect", "heldout_reduction", "criterion")} for r in doc["ranking"][:3]]}
         if "size" in d:
             row["size"] = round(d["size"], 4)
             row["form"] = d.get("form", {})
         rows.append(row)
         print(f"set {d['index']:3d}: truth {d['effect']:<20} verdict {doc['verdict']:<20} "
               f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f}", flush=True)
-    labels = sorted(load_effects("timedomain")) + ["none"]
+    labels = sorted(load_effects(problem)) + ["none"]
     summary = summarise(rows, labels)
-    cmd = "python -m benchmark.blind " + " ".join(a for a in __import__("sys").argv[1:])
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "confusion.md", render(summary, rows, cmd.strip()))
+    text = render(summary, [{k: v for k, v in r.items() if k != "ranking"} for r in rows], command)
+    text = text.replace("# Blind evaluation of the sim-to-real diagnosis", title)
+    write_text_atomic(out / "confusion.md", text)
     write_text_atomic(out / "blind.json", json.dumps({"summary": summary, "sets": rows}, indent=1) + "\n")
     write_table_atomic(out / "confusion.csv", {"truth": np.array(labels, dtype=object),
                                                **{v: np.array(summary["confusion"])[:, j]
                                                   for j, v in enumerate(labels)}})
     write_yaml_atomic(out / "config.yaml", OmegaConf.to_container(cfg, resolve=True))
-    print(render(summary, rows, cmd.strip()))
+    print(text)
+    return summary
+
+
+@hydra.main(version_base="1.3", config_path="../conf", config_name="blind")
+@user_errors
+def main(cfg) -> None:
+    from synthetic.startup import generate
+
+    run_blind(cfg, "timedomain", draw_sets(cfg), set_config, generate,
+              "# Blind evaluation of the sim-to-real diagnosis",
+              ("python -m benchmark.blind " + " ".join(sys.argv[1:])).strip())
 
 
 if __name__ == "__main__":

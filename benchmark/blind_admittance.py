@@ -13,19 +13,13 @@ rate on effect-free sets, median held-out gap shrinkage of correct verdicts
 
 from __future__ import annotations
 
-import json
 import sys
-from pathlib import Path
 
 import hydra
-import numpy as np
 from omegaconf import OmegaConf, open_dict
 
 from benchmark import blind
-from benchmark.blind import render, summarise
 from benchmark.cli import run_hydra_main, user_errors
-from benchmark.data.tables import write_table_atomic, write_text_atomic, write_yaml_atomic
-from benchmark.effects import load_effects
 
 FORM_CHOICES = {
     "double_cage": lambda rng: [
@@ -76,57 +70,11 @@ def set_config(cfg, d: dict):
 @hydra.main(version_base="1.3", config_path="../conf", config_name="blind_admittance")
 @user_errors
 def main(cfg) -> None:
-    from benchmark.diagnose import run_diagnosis
     from synthetic.admittance import generate
 
-    work = Path(cfg.workdir)
-    out = Path(cfg.out)
-    rows = []
-    for d in draw_sets(cfg):
-        sc = set_config(cfg, d)
-        folder = work / "sets" / f"set_{d['index']:03d}"
-        generate(sc, folder)
-        # the truth leaves the data folder before the diagnosis sees it
-        (work / "truth").mkdir(parents=True, exist_ok=True)
-        (folder / "truth.yaml").replace(work / "truth" / f"set_{d['index']:03d}.yaml")
-        with open_dict(sc):
-            sc.data.path = str(folder)
-            sc.effects, sc.effect_size, sc.effect_form = [], {}, {}
-        doc = run_diagnosis(sc, work / "diagnoses" / f"set_{d['index']:03d}")
-        row = {
-            "index": d["index"],
-            "truth": d["effect"],
-            "verdict": doc["verdict"],
-            "gap_before": doc["gap_before"]["heldout_rms_over_noise"],
-            "gap_after": doc["gap_after"]["heldout_rms_over_noise"],
-            "ranking": [{k: r[k] for k in ("effect", "heldout_reduction", "criterion")} for r in doc["ranking"][:3]],
-        }
-        if "size" in d:
-            row["size"] = round(d["size"], 4)
-            row["form"] = d.get("form", {})
-        rows.append(row)
-        print(
-            f"set {d['index']:3d}: truth {d['effect']:<20} verdict {doc['verdict']:<20} "
-            f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f}",
-            flush=True,
-        )
-    labels = sorted(load_effects("admittance")) + ["none"]
-    summary = summarise(rows, labels)
-    cmd = ("python -m benchmark.blind_admittance " + " ".join(sys.argv[1:])).strip()
-    out.mkdir(parents=True, exist_ok=True)
-    text = render(summary, [{k: v for k, v in r.items() if k != "ranking"} for r in rows], cmd)
-    text = text.replace("# Blind evaluation of the sim-to-real diagnosis", "# Blind evaluation: slip-sweep diagnosis")
-    write_text_atomic(out / "confusion.md", text)
-    write_text_atomic(out / "blind.json", json.dumps({"summary": summary, "sets": rows}, indent=1) + "\n")
-    write_table_atomic(
-        out / "confusion.csv",
-        {
-            "truth": np.array(labels, dtype=object),
-            **{v: np.array(summary["confusion"])[:, j] for j, v in enumerate(labels)},
-        },
-    )
-    write_yaml_atomic(out / "config.yaml", OmegaConf.to_container(cfg, resolve=True))
-    print(text)
+    blind.run_blind(cfg, "admittance", draw_sets(cfg), set_config, generate,
+                    "# Blind evaluation: slip-sweep diagnosis",
+                    ("python -m benchmark.blind_admittance " + " ".join(sys.argv[1:])).strip())
 
 
 if __name__ == "__main__":
