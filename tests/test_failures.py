@@ -425,3 +425,26 @@ def test_harness_crash_while_writing_result_keeps_previous_result(tmp_path, monk
     monkeypatch.undo()
     assert (tmp_path / "result.json").read_text() == before
     assert _temp_files(tmp_path) == []
+
+
+def test_single_failed_run_exits_3_with_its_result_written(tmp_path):
+    """A single run whose plugin fails is recorded (result.json, status failed) and the command
+    exits 3, so a script can tell it from a finished run (0) and a user error (2)."""
+    conf = tmp_path / "conf" / "optimizer"
+    conf.mkdir(parents=True)
+    (conf / "fail_raise.yaml").write_text(
+        "name: fail_raise\ndefault_budget: 100\nplugin:\n  _target_: tests.test_failures.plugin_raises\n"
+        "  _partial_: true\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("IMBENCH_DEBUG", "HYDRA_FULL_ERROR")}
+    env["PYTHONPATH"] = os.pathsep.join([str(REPO), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    run_dir = tmp_path / "run"
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmark", f"hydra.searchpath=[file://{tmp_path / 'conf'}]", "optimizer=fail_raise",
+         "budget=40", *SMALL, f"hydra.run.dir={run_dir}"],
+        cwd=REPO, env=env, capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 3, proc.stdout[-2000:] + proc.stderr[-2000:]
+    rec = json.loads((run_dir / "result.json").read_text())
+    assert rec["status"] == "failed" and "deliberate" in rec["message"]
+    assert "Traceback" not in proc.stderr
