@@ -93,7 +93,45 @@ class DoubleCage(Effect):
         return rows
 
 
-class MainSaturation(Effect):
+class _Saturation(Effect):
+    """A saturating branch: ``i = psi/L (1 + k (|psi|/psi_ref)^n)`` on the extended-model
+    fields ``{prefix}_k``, ``{prefix}_psi``, ``{prefix}_exp``. Size ``k``; form ``exponent`` n;
+    the augmentation fits ``k`` and ``n`` with the reference flux from the base fit."""
+
+    prefix = ""
+    default_exponent = 2.0
+    max_exponent = 8.0
+    exponent_starts = (2.0, 4.0)
+
+    def plant_reference(self, row, ctx) -> float:
+        raise NotImplementedError
+
+    def model_reference(self, ctx) -> float:
+        raise NotImplementedError
+
+    def plant(self, row, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        row = row.copy()
+        row[IDX[f"{self.prefix}_k"]] = size
+        row[IDX[f"{self.prefix}_psi"]] = self.plant_reference(row, ctx)
+        row[IDX[f"{self.prefix}_exp"]] = float(form.get("exponent", self.default_exponent))
+        return row
+
+    def extra_bounds(self, ctx):
+        return np.array([0.0, 1.0]), np.array([2.0, self.max_exponent])
+
+    def extra_starts(self, ctx):
+        return [np.array([0.2, n]) for n in self.exponent_starts]
+
+    def augment(self, rows, extras, ctx):
+        rows = rows.copy()
+        rows[:, IDX[f"{self.prefix}_k"]] = extras[:, 0]
+        rows[:, IDX[f"{self.prefix}_exp"]] = extras[:, 1]
+        rows[:, IDX[f"{self.prefix}_psi"]] = self.model_reference(ctx)
+        return rows
+
+
+class MainSaturation(_Saturation):
     """Magnetising inductance falls with flux: ``i_M = psi_M/L_M (1 + k (|psi_M|/psi_rated)^n)``.
 
     Size ``k``: extra magnetising current at rated flux (fraction); form ``exponent`` n."""
@@ -104,27 +142,16 @@ class MainSaturation(Effect):
     extra_names = ("ms_k", "ms_exp")
     physics = "magnetising inductance falls with flux magnitude"
     shows_in = "steady-state / no-load current amplitude, low-order harmonics"
+    prefix = "ms"
+    default_exponent = 4.0
+    max_exponent = 10.0
+    exponent_starts = (4.0, 2.0)
 
-    def plant(self, row, size, ctx, form=None):
-        form = {**self.form, **(form or {})}
-        row = row.copy()
-        row[IDX["ms_k"]] = size
-        row[IDX["ms_psi"]] = ctx.flux
-        row[IDX["ms_exp"]] = float(form.get("exponent", 4.0))
-        return row
+    def plant_reference(self, row, ctx):
+        return ctx.flux
 
-    def extra_bounds(self, ctx):
-        return np.array([0.0, 1.0]), np.array([2.0, 10.0])
-
-    def extra_starts(self, ctx):
-        return [np.array([0.2, 4.0]), np.array([0.2, 2.0])]
-
-    def augment(self, rows, extras, ctx):
-        rows = rows.copy()
-        rows[:, IDX["ms_k"]] = extras[:, 0]
-        rows[:, IDX["ms_exp"]] = extras[:, 1]
-        rows[:, IDX["ms_psi"]] = ctx.flux
-        return rows
+    def model_reference(self, ctx):
+        return ctx.flux
 
 
 class IronLoss(Effect):
@@ -191,7 +218,7 @@ class TemperatureDrift(Effect):
         return rows
 
 
-class LeakageSaturation(Effect):
+class LeakageSaturation(_Saturation):
     """Leakage inductance falls at high current:
     ``i_s = dpsi/L_sigma (1 + k (|dpsi|/(L_sigma I_peak))^n)``.
 
@@ -204,27 +231,16 @@ class LeakageSaturation(Effect):
     extra_names = ("ls_k", "ls_exp")
     physics = "leakage inductance falls at high current"
     shows_in = "start-up current peaks"
+    prefix = "ls"
+    default_exponent = 2.0
+    max_exponent = 8.0
+    exponent_starts = (2.0, 4.0)
 
-    def plant(self, row, size, ctx, form=None):
-        form = {**self.form, **(form or {})}
-        row = row.copy()
-        row[IDX["ls_k"]] = size
-        row[IDX["ls_psi"]] = row[IDX["L_sigma"]] * ctx.I_peak
-        row[IDX["ls_exp"]] = float(form.get("exponent", 2.0))
-        return row
+    def plant_reference(self, row, ctx):
+        return row[IDX["L_sigma"]] * ctx.I_peak  # the plant's own leakage
 
-    def extra_bounds(self, ctx):
-        return np.array([0.0, 1.0]), np.array([2.0, 8.0])
-
-    def extra_starts(self, ctx):
-        return [np.array([0.2, 2.0]), np.array([0.2, 4.0])]
-
-    def augment(self, rows, extras, ctx):
-        rows = rows.copy()
-        rows[:, IDX["ls_k"]] = extras[:, 0]
-        rows[:, IDX["ls_exp"]] = extras[:, 1]
-        rows[:, IDX["ls_psi"]] = ctx.L_sigma * ctx.I_peak
-        return rows
+    def model_reference(self, ctx):
+        return ctx.L_sigma * ctx.I_peak  # the base fit's leakage
 
 
 class InverterDrop(Effect):
