@@ -17,8 +17,8 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 
-from benchmark.cli import run_hydra_main, user_errors
-from benchmark.harness import format_table, run
+from benchmark.core.cli import run_hydra_main, user_errors
+from benchmark.core.harness import format_table, run
 
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="config")

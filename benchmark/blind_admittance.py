@@ -8,7 +8,7 @@ the preset's bare 6-parameter circuit, and noise. The generator writes the data 
 ``truth.yaml`` is moved to a separate folder before the diagnosis is given the data folder. The
 verdicts are compared with the truth afterwards: confusion matrix, correct rate, false-alarm
 rate on effect-free sets, median held-out gap shrinkage of correct verdicts
-(:func:`benchmark.blind.summarise`, :func:`benchmark.blind.render`), written to ``out``.
+(:func:`benchmark.analysis.blind.summarise`, :func:`benchmark.analysis.blind.render`), written to ``out``.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import sys
 import hydra
 from omegaconf import OmegaConf, open_dict
 
-from benchmark import blind
-from benchmark.cli import run_hydra_main, user_errors
+from benchmark.analysis import blind
+from benchmark.core.cli import run_hydra_main, user_errors
 
 FORM_CHOICES = {
     "double_cage": lambda rng: [

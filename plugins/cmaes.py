@@ -33,7 +33,7 @@ from collections.abc import Mapping, Sequence
 import cma
 import numpy as np
 
-from benchmark.problem import BudgetedProblem, OptimizerOutput
+from benchmark.core.problem import OptimizerOutput, SearchProblem
 
 __all__ = ["minimize"]
 
@@ -62,7 +62,7 @@ def _finite_for_tell(c: np.ndarray) -> np.ndarray:
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     *,
     seed: int,
     sigma0: float = 0.3,

@@ -37,7 +37,7 @@ import random
 import numpy as np
 from deap import algorithms, base, creator, tools
 
-from benchmark.problem import BudgetedProblem, OptimizerOutput
+from benchmark.core.problem import OptimizerOutput, SearchProblem
 
 __all__ = ["minimize"]
 
@@ -58,7 +58,7 @@ def _clip(ind) -> None:
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     *,
     seed: int,
     mu: int = 100,

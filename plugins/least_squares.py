@@ -31,13 +31,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-from benchmark.problem import BudgetedProblem, BudgetExhausted, OptimizerOutput
+from benchmark.core.problem import BudgetExhausted, OptimizerOutput, SearchProblem
 
 __all__ = ["minimize"]
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     *,
     seed: int,
     ftol: float = 1e-8,

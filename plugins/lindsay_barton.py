@@ -7,8 +7,8 @@ model mapped back to the circuit) and minimise the error function by conjugate g
 
 * **Start.** The plugin only knows the plugin interface. A problem that can compute the paper's
   initial models from its data offers the optional hook ``initial_guess(kind) -> vector | None`` on
-  the :class:`benchmark.problem.Problem` (reached as ``problem.problem`` through the
-  :class:`benchmark.problem.BudgetedProblem`); ``kind`` is ``initial_model`` ("A" or "E"). Without the
+  the :class:`benchmark.core.problem.Problem` (reached as ``problem.problem`` through the
+  :class:`benchmark.core.problem.SearchProblem`); ``kind`` is ``initial_model`` ("A" or "E"). Without the
   hook, or when it returns None, the start is ``problem.crude_start()`` (so the plugin also runs on the
   time-domain problem). The hook works on the data alone and evaluates no cost, so it spends none of
   the budget: for the admittance problem's "E" this includes the regression's own outer search over
@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-from benchmark.problem import BudgetedProblem, OptimizerOutput
+from benchmark.core.problem import OptimizerOutput, SearchProblem
 
 __all__ = ["minimize", "initial_point"]
 
@@ -43,7 +43,7 @@ class _BudgetSpent(Exception):
     pass
 
 
-def initial_point(problem: BudgetedProblem, initial_model: str) -> tuple[np.ndarray, str]:
+def initial_point(problem: SearchProblem, initial_model: str) -> tuple[np.ndarray, str]:
     """The start and a note saying where it came from (the hook, or the crude start)."""
     inner = getattr(problem, "problem", None)
     hook = getattr(inner, "initial_guess", None)
@@ -57,7 +57,7 @@ def initial_point(problem: BudgetedProblem, initial_model: str) -> tuple[np.ndar
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     seed: int = 0,
     *,
     initial_model: str = "E",
@@ -73,7 +73,7 @@ def minimize(
     ``seed`` is accepted for the interface; the method is deterministic."""
     del seed
     if int(searches) < 1:
-        from benchmark.errors import ConfigError
+        from benchmark.core.errors import ConfigError
 
         raise ConfigError(f"optimizer.plugin.searches: at least 1, got {searches}")
     lo, hi = problem.lower, problem.upper

@@ -21,7 +21,7 @@ from __future__ import annotations
 import nlopt
 import numpy as np
 
-from benchmark.problem import BudgetedProblem, OptimizerOutput
+from benchmark.core.problem import OptimizerOutput, SearchProblem
 
 __all__ = ["minimize"]
 
@@ -29,7 +29,7 @@ _INF_STANDIN = 1e300
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     *,
     seed: int,
     population: int | None = None,

@@ -13,7 +13,7 @@ Evaluation and budget:
   remaining budget.
 * PyGAD does not re-evaluate solutions it already knows (elites kept with ``keep_elitism``,
   and children identical to them), so the number of evaluations per generation varies. The
-  harness counter (``BudgetedProblem``) is the only count: ``num_generations`` is just an upper
+  harness counter (``SearchProblem``) is the only count: ``num_generations`` is just an upper
   bound (the budget itself: every generation evaluates at least one new solution), and
   ``on_generation`` returns ``"stop"`` as soon as the budget is spent. Once it is, the fitness
   function no longer calls the problem at all.
@@ -30,7 +30,7 @@ import logging
 import numpy as np
 import pygad
 
-from benchmark.problem import BudgetedProblem, OptimizerOutput
+from benchmark.core.problem import OptimizerOutput, SearchProblem
 
 __all__ = ["minimize"]
 
@@ -40,7 +40,7 @@ _LOG = logging.getLogger("imbench.plugins.pygad")
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     *,
     seed: int,
     sol_per_pop: int = 100,

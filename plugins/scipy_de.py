@@ -21,7 +21,7 @@ import math
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from benchmark.problem import BudgetedProblem, OptimizerOutput
+from benchmark.core.problem import OptimizerOutput, SearchProblem
 
 __all__ = ["minimize"]
 
@@ -31,7 +31,7 @@ class _BudgetSpent(Exception):
 
 
 def minimize(
-    problem: BudgetedProblem,
+    problem: SearchProblem,
     *,
     seed: int,
     strategy: str = "best1bin",

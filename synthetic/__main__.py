@@ -14,7 +14,7 @@ from pathlib import Path
 import hydra
 from hydra.utils import instantiate
 
-from benchmark.cli import user_errors
+from benchmark.core.cli import user_errors
 
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="synthetic")

@@ -7,7 +7,7 @@ voltage levels (one sweep each) and a down-sweep after each up-sweep. The stator
 measured at ``t = 0`` (machine at the start speed, supply about to be connected; the first reading
 follows ``settle_s`` later) and ``dc_after_delay_s`` after the last reading (supply off).
 
-Warming (``test.warming``): the one-body thermal model of :class:`benchmark.model.circuit.ThermalModel`
+Warming (``test.warming``): the one-body thermal model of :class:`benchmark.problems.admittance.circuit.ThermalModel`
 is integrated along the whole session on a fine time grid, heated by all electrical losses
 (``P_in - P_mech``: stator and rotor copper and core losses; in braking the shaft power too), with the
 copper resistances R1, R2 following the temperature. Between sweeps without a down-sweep the supply
@@ -15,15 +15,15 @@ is off and the speed returns to the start unexcited. The data carry the DC resis
 the winding temperature at the first DC measurement, and the cooling rates ``K/C`` (what two cooling
 curves give; the capacitance, i.e. the heating scale, stays unknown to the identification).
 
-Noise (``cfg.noise.admittance_fraction``): white Gaussian noise of standard deviation ``fraction *
+Noise (``run['noise']['admittance_fraction']``): white Gaussian noise of standard deviation ``fraction *
 full_scale_admittance`` on G and on B, and ``fraction * full_scale_torque`` on the torque, from
 ``numpy.random.default_rng(noise.seed)``. DC resistances are exact (a four-wire measurement).
 
-Unmodelled effects (``cfg.effects``, ``effect_size``, ``effect_form``; the catalogue of
-:mod:`benchmark.effects.admittance`): with ``effects`` named, the data hold exactly those effects on the
+Unmodelled effects (``run.effects``, ``effect_size``, ``effect_form``; the catalogue of
+:mod:`benchmark.problems.admittance.effects`): with ``effects`` named, the data hold exactly those effects on the
 preset's bare 6-parameter machine (its ``R1sigma``, ``R2sigma``, ``X3`` and its warming, which are catalogue
 effects themselves, are removed first); ``effects=[none]`` is the bare machine. The sweep is then computed on
-the generalised circuit :class:`benchmark.effects.admittance.SweepCircuit` (torque from the air-gap power),
+the generalised circuit :class:`benchmark.problems.admittance.sweep_circuit.SweepCircuit` (torque from the air-gap power),
 and ``temperature_drift`` turns the warming on with the heating scale set to give its temperature rise.
 Without ``effects`` the preset is used as it is (Lindsay and Barton's model F, warming on).
 
@@ -38,9 +38,8 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
-from benchmark.data.admittance import AdmittanceData, write_admittance
-from benchmark.errors import ConfigError
-from benchmark.model.circuit import (
+from benchmark.core.errors import ConfigError
+from benchmark.problems.admittance.circuit import (
     CircuitParameters,
     ThermalModel,
     copper_factor,
@@ -48,20 +47,29 @@ from benchmark.model.circuit import (
     slip_from_speed,
     synchronous_speed_rpm,
 )
+from benchmark.problems.admittance.data import AdmittanceData, write_admittance
 
 __all__ = ["make_dataset", "generate", "parameters_from_config", "nice_ceiling"]
 
 FINE_STEP_S = 0.05
 
 
-def _sel(cfg, key, default=None):
-    v = OmegaConf.select(cfg, key, default=default) if OmegaConf.is_config(cfg) else default
-    return default if v is None else v
+def _sel(run, key, default=None):
+    """``run[a][b]...`` for the dotted ``key`` of the resolved run configuration (a plain
+    mapping), or ``default`` when a level is missing or the value is null."""
+    v = run
+    for part in key.split("."):
+        if not hasattr(v, "get"):
+            return default
+        v = v.get(part)
+        if v is None:
+            return default
+    return v
 
 
-def parameters_from_config(cfg) -> CircuitParameters:
+def parameters_from_config(run) -> CircuitParameters:
     """The true circuit (ohm at the test frequency, at ``motor.reference_temperature``)."""
-    p = _sel(cfg, "motor.parameters")
+    p = _sel(run, "motor.parameters")
     if p is None:
         raise ConfigError(
             "motor.parameters: the admittance motor preset must give the circuit parameters "
@@ -114,9 +122,9 @@ def _schedule(test, voltages):
     return segs, reads, t
 
 
-def _effects_plant(cfg, params, test, thermal_cfg, voltages, f, p) -> dict | None:
-    """The plant with the unmodelled effects of ``cfg.effects`` injected (the hook of
-    :mod:`benchmark.effects.admittance`), or None when no effect is named.
+def _effects_plant(run, params, test, thermal_cfg, voltages, f, p) -> dict | None:
+    """The plant with the unmodelled effects of ``run.effects`` injected (the hook of
+    :mod:`benchmark.problems.admittance.effects`), or None when no effect is named.
 
     With ``effects`` given, the data hold exactly the named effects: the preset's own catalogue
     terms (``R1sigma``, ``R2sigma``, ``X3``: ``leakage_core_loss``, ``leakage_saturation``; the
@@ -124,15 +132,15 @@ def _effects_plant(cfg, params, test, thermal_cfg, voltages, f, p) -> dict | Non
     each named effect is added at ``effect_size[name]`` (default: the geometric middle of its
     realistic range) with ``effect_form[name]`` varying its form. ``effects=[none]`` is the bare
     6-parameter machine without warming."""
-    from benchmark.effects import load_effects
-    from benchmark.effects.admittance import SweepCircuit, SweepContext
+    from benchmark.core.effects import load_effects
+    from benchmark.problems.admittance.sweep_circuit import SweepCircuit, SweepContext
 
-    names = [str(n) for n in (_sel(cfg, "effects", []) or [])]
+    names = [str(n) for n in (_sel(run, "effects", []) or [])]
     if not names:
         return None
     names = [n for n in names if n != "none"]
-    sizes = _sel(cfg, "effect_size", {}) or {}
-    forms = _sel(cfg, "effect_form", {}) or {}
+    sizes = _sel(run, "effect_size", {}) or {}
+    forms = _sel(run, "effect_form", {}) or {}
     sizes = OmegaConf.to_container(sizes) if OmegaConf.is_config(sizes) else dict(sizes)
     forms = OmegaConf.to_container(forms) if OmegaConf.is_config(forms) else dict(forms)
     unknown = sorted(set(sizes) - set(names)) + sorted(set(forms) - set(names))
@@ -198,12 +206,12 @@ def _thermal_for_rise(session_temperatures, thermal: ThermalModel, theta0: float
     return thermal
 
 
-def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
+def make_dataset(run) -> tuple[AdmittanceData, dict]:
     """The sweep data set and its truth document for the composed config (motor preset + noise)."""
-    params = parameters_from_config(cfg)
-    f = float(_sel(cfg, "motor.frequency", 60.0))
-    p = int(_sel(cfg, "motor.pole_pairs", 2))
-    theta_ref = float(_sel(cfg, "motor.reference_temperature", 50.0))
+    params = parameters_from_config(run)
+    f = float(_sel(run, "motor.frequency", 60.0))
+    p = int(_sel(run, "motor.pole_pairs", 2))
+    theta_ref = float(_sel(run, "motor.reference_temperature", 50.0))
     test_defaults = {
         "voltages": [30.2],
         "speed_start_rpm": -1800.0,
@@ -217,7 +225,7 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
         "full_scale_admittance": None,
         "record_torque": True,
     }
-    test_cfg = _sel(cfg, "motor.test", {})
+    test_cfg = _sel(run, "motor.test", {})
     test_cfg = OmegaConf.to_container(test_cfg) if OmegaConf.is_config(test_cfg) else dict(test_cfg)
     unknown = set(test_cfg) - set(test_defaults)
     if unknown:
@@ -227,9 +235,9 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     if not voltages or min(voltages) <= 0:
         raise ConfigError(f"motor.test.voltages: positive phase voltages (V RMS) needed, got {voltages}")
 
-    th = _sel(cfg, "motor.thermal", {})
+    th = _sel(run, "motor.thermal", {})
     th = OmegaConf.to_container(th) if OmegaConf.is_config(th) else dict(th)
-    plant = _effects_plant(cfg, params, test, th, voltages, f, p)
+    plant = _effects_plant(run, params, test, th, voltages, f, p)
     if plant is not None:
         params, test, th = plant["params"], plant["test"], plant["thermal"]
     warming = bool(test["warming"])
@@ -299,8 +307,8 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     fs = float(fs) if fs is not None else nice_ceiling(float(np.max(np.abs(Y))))
     fs_T = nice_ceiling(float(np.max(np.abs(T))))
 
-    frac = float(_sel(cfg, "noise.admittance_fraction", 0.0))
-    seed = int(_sel(cfg, "noise.seed", 0))
+    frac = float(_sel(run, "noise.admittance_fraction", 0.0))
+    seed = int(_sel(run, "noise.seed", 0))
     rng = np.random.default_rng(seed)
     G = Y.real + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
     B = Y.imag + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
@@ -339,12 +347,12 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
         ),
         supply_off=[(t0, t1) for t0, t1, _, _, V in segs if V == 0] or None,
         source="synthetic",
-        description=f"synthetic Lindsay-Barton sweep, motor {_sel(cfg, 'motor.name', '?')}, "
+        description=f"synthetic Lindsay-Barton sweep, motor {_sel(run, 'motor.name', '?')}, "
         f"{len(voltages)} voltage level(s), down-sweep {bool(test['down_sweep'])}",
     )
     truth = {
         "kind": "admittance",
-        "motor": str(_sel(cfg, "motor.name", "?")),
+        "motor": str(_sel(run, "motor.name", "?")),
         "model": "6-parameter" if params.is_six_parameter else "8-parameter",
         "reference_temperature": theta_ref,
         "parameters": params.to_dict() | {"R1_total": params.R1_total},
@@ -374,7 +382,7 @@ def make_dataset(cfg) -> tuple[AdmittanceData, dict]:
     return data, truth
 
 
-def generate(cfg, outdir: Path) -> Path:
+def generate(run, outdir: Path) -> Path:
     """Write the data set of :func:`make_dataset` (section 7 format + truth.yaml) to ``outdir``."""
-    data, truth = make_dataset(cfg)
+    data, truth = make_dataset(run)
     return write_admittance(Path(outdir), data, truth=truth)

@@ -1,0 +1,430 @@
+"""The harness: builds the problem and the optimiser from the Hydra config, runs one
+identification, scores it against the truth when known, and writes ``result.json``.
+
+Everything is wired through ``hydra.utils.instantiate``: ``cfg.problem.setup`` builds the
+problem, ``cfg.optimizer.plugin`` the optimiser. The harness counts evaluations (through
+:class:`benchmark.core.problem.BudgetedProblem`), so every plugin is held to the same budget.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import importlib
+import inspect
+import json
+import math
+import platform
+import sys
+import time
+import warnings
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import yaml
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from benchmark.core.budget import BudgetedProblem, run_plugin
+from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
+from benchmark.core.identify import identify, polish_and_keep_better
+from benchmark.core.io import write_table_atomic, write_text_atomic
+from benchmark.core.journal import EvaluationJournal
+from benchmark.core.problem import OptimizeResult, Problem, Status
+from benchmark.core.progress import ProgressBar, progress_wanted
+from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
+from benchmark.core.tables import table_size_limit
+
+#: The checkpoint of a run in progress (see :class:`benchmark.core.problem.EvaluationJournal`);
+#: removed once ``result.json`` is written.
+#: Config keys that do not change a run's trajectory (left out of its fingerprint).
+
+RECORDED_PACKAGES = ("numpy", "scipy", "numba", "pandas", "hydra-core", "deap", "pygad", "nlopt", "cma",
+                     "imbench")
+
+
+@dataclass
+class RunOutcome:
+    problem: Problem
+    result: OptimizeResult
+    record: dict
+
+
+def resolve_budget(cfg: DictConfig) -> int:
+    budget = cfg.get("budget")
+    if budget is None:
+        budget = cfg.optimizer.get("default_budget")
+        key = "optimizer.default_budget"
+    else:
+        key = "budget"
+    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+        raise ConfigError(f"{key}: must be a positive whole number of evaluations, got {budget!r}")
+    return budget
+
+
+def validate_config(cfg: DictConfig) -> None:
+    """Catch configuration mistakes before any work starts (no data read, nothing simulated):
+    groups present, seed, budget, polish, time limit, checkpoint keys, the shape of
+    ``bounds``, the problem's own checks (``check_config`` in the module of its set-up
+    function) and the optimiser plugin (importable, options it accepts)."""
+    for key in ("problem", "optimizer", "motor"):
+        if key not in cfg or cfg[key] is None:
+            raise ConfigError(f"{key}: missing config group")
+    if "plugin" not in cfg.optimizer or "_target_" not in cfg.optimizer.plugin:
+        raise ConfigError("optimizer.plugin._target_: the optimiser config must name its plugin function")
+    if "setup" not in cfg.problem or "_target_" not in cfg.problem.setup:
+        raise ConfigError("problem.setup._target_: the problem config must name its set-up function")
+    seed = cfg.get("seed")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ConfigError(f"seed: must be a non-negative integer, got {seed!r}")
+    resolve_budget(cfg)
+    if cfg.get("polish"):
+        pb = cfg.get("polish_budget")
+        if isinstance(pb, bool) or not isinstance(pb, int) or pb < 1:
+            raise ConfigError(f"polish_budget: must be a positive whole number, got {pb!r}")
+    limit = cfg.get("time_limit_s")
+    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
+                              or not math.isfinite(limit) or limit <= 0):
+        raise ConfigError(f"time_limit_s: must be a positive number of seconds or null, got {limit!r}")
+    for key in ("resume", "checkpoint", "polish", "figures"):
+        v = cfg.get(key)
+        if v is not None and not isinstance(v, bool):
+            raise ConfigError(f"{key}: must be true or false, got {v!r}")
+    progress = cfg.get("progress", "auto")
+    if not (isinstance(progress, bool) or progress == "auto"):
+        raise ConfigError(f"progress: must be auto, true or false, got {progress!r}")
+    if cfg.get("resume") and cfg.get("checkpoint") is False:
+        raise ConfigError("resume: needs checkpoint=true (a run without checkpoints cannot be resumed)")
+    data = cfg.get("data")
+    mib = data.get("max_file_mib") if data is not None else None
+    if mib is not None and (isinstance(mib, bool) or not isinstance(mib, (int, float)) or not mib > 0):
+        raise ConfigError(f"data.max_file_mib: must be a positive number of MiB, got {mib!r}")
+    bounds = cfg.get("bounds")
+    if bounds is not None:
+        if not OmegaConf.is_dict(bounds):
+            raise ConfigError(f"bounds: expected a mapping {{name: [low, high]}}, e.g. bounds={{Rs:[1,10]}}, "
+                              f"got {bounds!r}")
+        for k, v in bounds.items():
+            if not OmegaConf.is_list(v) or len(v) != 2:
+                raise ConfigError(f"bounds.{k}: expected [low, high], got {v!r}")
+    check = _problem_check(cfg)
+    if check is not None:
+        check(resolved(cfg))
+    check_plugin(cfg)
+
+
+def resolved(cfg: DictConfig) -> dict:
+    """The run configuration as a plain, resolved mapping: what the problem hooks receive."""
+    return OmegaConf.to_container(cfg, resolve=True)
+
+
+def load_dataset(cfg: DictConfig, with_truth: bool = True):
+    """The run's data set and truth document (None for measured data): the data folder
+    ``data.path`` through the problem's ``load`` and ``truth`` hooks, else synthetic data from
+    its ``make`` hook. A folder of the other problem's kind is refused with the right option.
+    ``with_truth=False`` (the diagnosis) never opens a folder's truth.yaml and drops the
+    synthetic truth at once."""
+    run = resolved(cfg)
+    path = (run.get("data") or {}).get("path")
+    if path is None:
+        dataset, truth = instantiate(cfg.problem.make)(run)
+        return dataset, truth if with_truth else None
+    check_data_kind(Path(path), str(cfg.problem.name), str(cfg.problem.get("data_kind", cfg.problem.name)))
+    return instantiate(cfg.problem.load)(path), instantiate(cfg.problem.truth)(path) if with_truth else None
+
+
+def check_data_kind(folder: Path, problem: str, expected: str) -> None:
+    """A ConfigError when ``folder/meta.yaml`` declares a ``kind`` another problem reads."""
+    meta = folder / "meta.yaml"
+    if not meta.is_file():
+        return
+    try:
+        doc = yaml.safe_load(meta.read_text(encoding="utf-8-sig"))
+    except (yaml.YAMLError, UnicodeDecodeError, ValueError, RecursionError):
+        return  # the loader reports a malformed meta.yaml with file and line
+    kind = doc.get("kind") if isinstance(doc, dict) else None
+    if isinstance(kind, str) and kind != expected and kind in DATA_KIND_PROBLEM:
+        raise ConfigError(f"data.path: {folder} holds kind: {kind}, which problem={problem} does not read; "
+                          f"use problem={DATA_KIND_PROBLEM[kind]}")
+
+
+#: Which problem reads a data folder of each ``kind`` (meta.yaml).
+DATA_KIND_PROBLEM = {"startup": "timedomain", "admittance": "admittance"}
+
+
+def build_problem(cfg: DictConfig) -> Problem:
+    """The problem of a run, through the problem's hooks: typed settings from the resolved
+    configuration, the data set (folder or synthetic), then ``setup(settings, data, truth)``."""
+    settings = instantiate(cfg.problem.settings)(resolved(cfg))
+    dataset, truth_doc = load_dataset(cfg)
+    return instantiate(cfg.problem.setup)(settings, dataset, truth_doc)
+
+
+def run_diagnosis(cfg: DictConfig, outdir: Path, progress=None) -> dict:
+    """Diagnose the configured data set into ``outdir`` through the problem's ``diagnose`` hook
+    (the truth of synthetic data is discarded here); returns the diagnosis document."""
+    dataset, _ = load_dataset(cfg, with_truth=False)
+    base = functools.partial(identify, plugin=instantiate(cfg.optimizer.plugin), budget=int(cfg.budget),
+                             seed=int(cfg.seed), name=str(cfg.optimizer.name),
+                             polish_budget=int(cfg.polish_budget))
+    return instantiate(cfg.problem.diagnose)(resolved(cfg), dataset, outdir, base, progress)
+
+
+def _problem_check(cfg):
+    """The problem's ``check_config(run)``, if the module of its set-up function has one."""
+    target = str(cfg.problem.setup._target_)
+    module_name = target.rpartition(".")[0]
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ConfigError(f"problem.setup._target_: cannot import {module_name!r}: {exc}") from None
+    return getattr(module, "check_config", None)
+
+
+def check_plugin(cfg: DictConfig):
+    """Import the plugin function and check its options against its signature; returns it."""
+    pcfg = cfg.optimizer.plugin
+    target = str(pcfg._target_)
+    module_name, _, attr = target.rpartition(".")
+    try:
+        fn = getattr(importlib.import_module(module_name), attr)
+    except ImportError as exc:
+        raise ConfigError(f"optimizer.plugin._target_: cannot import {module_name!r} for optimizer "
+                          f"{cfg.optimizer.get('name')!r}: {exc}") from None
+    except AttributeError:
+        raise ConfigError(f"optimizer.plugin._target_: {module_name!r} has no function {attr!r}") from None
+    try:
+        sig = inspect.signature(fn)
+    except (TypeError, ValueError):
+        return fn
+    params = sig.parameters
+    if any(p.kind == inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return fn
+    valid = [n for n, p in params.items() if n not in ("problem", "seed")
+             and p.kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+    for key in pcfg:
+        if str(key).startswith("_"):
+            continue
+        if key not in valid:
+            raise ConfigError(f"optimizer.plugin.{key}: not an option of {target}; valid: {valid}")
+    return fn
+
+
+def package_versions() -> dict[str, str]:
+    out = {"python": platform.python_version()}
+    for name in RECORDED_PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            pass
+    return out
+
+
+def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[str, float] | None:
+    """Signed relative error of each estimated parameter with a known, non-zero truth."""
+    if truth is None:
+        return None
+    out = {}
+    for k, v in estimate.items():
+        if k in truth and truth[k] != 0:
+            out[k] = (v - truth[k]) / abs(truth[k])
+    return out
+
+
+def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
+    """One identification run, written to ``outdir``.
+
+    Checkpoints (``checkpoint``, default true): every evaluated batch is journaled to
+    ``outdir/journal.bin`` as it happens. With ``resume=true`` and the same ``outdir``
+    (``hydra.run.dir=...``), the plugin starts again from scratch with the same seed and the
+    journal is replayed: batches identical bit for bit to the journaled ones get the journaled
+    costs without simulating, then the run goes on live, so a deterministic plugin finishes
+    exactly as an uninterrupted run would. A run whose ``result.json`` is already written is
+    not run again on resume (a resumed sweep skips its finished jobs).
+    """
+    outdir = Path(outdir)
+    validate_config(cfg)
+    budget = resolve_budget(cfg)
+    seed = int(cfg.seed)
+    name = str(cfg.optimizer.get("name", "optimizer"))
+    try:
+        plugin = instantiate(cfg.optimizer.plugin)
+    except Exception as exc:  # hydra's InstantiationException: a bad _target_ or option
+        raise ConfigError(f"optimizer.plugin: cannot build the plugin: {exc}") from None
+
+    t_start = time.perf_counter()
+    mib = (cfg.get("data") or {}).get("max_file_mib")
+    with warnings.catch_warnings(record=True) as caught, \
+            table_size_limit(None if mib is None else int(float(mib) * 2**20)):
+        warnings.simplefilter("always")
+        problem: Problem = build_problem(cfg)
+    run_warnings = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    for w in caught:  # shown once, after set-up (the command line prints them one line each)
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    setup_time = time.perf_counter() - t_start
+
+    fingerprint = run_fingerprint(resolved(cfg), problem)
+    journal, replay, resume_info = None, None, None
+    if cfg.get("resume"):
+        done = finished_run(outdir, fingerprint)
+        if done is not None:
+            return RunOutcome(problem=problem, result=_result_from_record(done), record=done)
+        replay, resume_info = read_checkpoint(outdir, fingerprint, problem, resolved(cfg))
+        if resume_info.get("note"):
+            warnings.warn(f"resume: {resume_info['note']}", ResumeWarning, stacklevel=2)
+            run_warnings.append(f"resume: {resume_info['note']}")
+    if cfg.get("checkpoint", True):
+        path = outdir / JOURNAL_NAME
+        if replay is not None:
+            journal = EvaluationJournal.reopen(path, replay)  # the cut-off tail is dropped here
+        else:
+            journal = EvaluationJournal.create(path, journal_header(resolved(cfg), problem, budget, fingerprint))
+
+    budgeted = BudgetedProblem(problem, budget, journal=journal, replay=replay.records if replay else None)
+    if replay is not None:
+        try:
+            budgeted.verify_replay()
+        except ResumeError:
+            journal.close()
+            raise
+    bar = None
+    if progress_wanted(cfg.get("progress", "auto")):
+        bar = ProgressBar(budget, f"{problem.name}/{name}")
+        budgeted.on_evaluate = bar
+    try:
+        result = run_plugin(plugin, budgeted, seed=seed, name=name, time_limit_s=cfg.get("time_limit_s"),
+                            record_failures=True)
+    finally:
+        if bar is not None:
+            budgeted.on_evaluate = None
+            bar.close(budgeted)
+        if journal is not None:
+            journal.close()
+    if resume_info is not None:
+        resume_info.update(replayed_batches=budgeted.replayed_batches,
+                           replayed_evaluations=budgeted.replayed_evaluations,
+                           mismatch=budgeted.replay_mismatch)
+        if budgeted.replaying:
+            resume_info["unreplayed_batches"] = len(budgeted._replay)
+        if budgeted.replay_mismatch:
+            run_warnings.append(f"resume: {budgeted.replay_mismatch['message']}")
+
+    ident = polish_and_keep_better(problem, result, budgeted,
+                                   int(cfg.polish_budget) if cfg.get("polish") else None)
+    history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
+    wall = time.perf_counter() - t_start
+
+    estimate = problem.estimate(x_best) if x_best is not None else None
+    truth = problem.truth
+    rel_error = score(estimate, truth) if estimate is not None else None
+    write_table_atomic(outdir / "history.csv", {
+        "evaluations": np.array([h[0] for h in history], dtype=int),
+        "best_cost": np.array([h[1] for h in history], dtype=float),
+        "phase": np.array([h[2] for h in history], dtype=object),
+    }, float_format="%.17g")
+    record = {
+        "problem": problem.name,
+        "optimizer": name,
+        "seed": seed,
+        "status": result.status.value,
+        "message": result.message,
+        "parameter_names": list(problem.parameter_names),
+        "searched": None if x_best is None else dict(zip(problem.parameter_names, map(float, x_best),
+                                                         strict=True)),
+        "estimate": estimate,
+        "truth": truth,
+        "rel_error": rel_error,
+        "cost": _finite_or_none(f_best),
+        "cost_optimizer": _finite_or_none(result.fun),
+        "evaluations": result.nfev + (polish_info or {}).get("evaluations", 0),
+        "evaluations_optimizer": result.nfev,
+        "budget": budget,
+        "nit": result.nit,
+        "polish": polish_info,
+        "time_limit_s": cfg.get("time_limit_s"),
+        "wall_time_s": wall,
+        "wall_time_optimizer_s": result.wall_time_s,
+        "setup_time_s": setup_time,
+        "history": "history.csv",
+        "bounds": {n: [float(lo), float(hi)] for n, lo, hi in zip(problem.parameter_names, problem.lower,
+                                                                 problem.upper, strict=True)},
+        "problem_info": problem.describe(),
+        "warnings": run_warnings,
+        "resume": resume_info,
+        "fingerprint": fingerprint,
+        "config": OmegaConf.to_container(cfg, resolve=True),
+        "versions": package_versions(),
+        "command": " ".join(sys.argv),
+    }
+    if result.traceback:
+        record["traceback"] = result.traceback
+    write_text_atomic(outdir / "result.json", json.dumps(record, indent=2, default=_json_default) + "\n")
+    if journal is not None:  # the result is safe: the checkpoint has served its purpose
+        with contextlib.suppress(OSError):
+            (outdir / JOURNAL_NAME).unlink()
+    if cfg.get("figures", True):
+        add_figures(outdir, problem, record, x_best)
+    return RunOutcome(problem=problem, result=result, record=record)
+
+
+# -- figures and progress ----------------------------------------------------------------------
+def add_figures(outdir: Path, problem: Problem, record: dict, x) -> None:
+    """Figures and ``report.md`` beside ``result.json`` (:mod:`benchmark.core.plotting`), listed in
+    ``record["figures"]``. The result is already on disk: whatever goes wrong here becomes a
+    warning in ``result.json`` and the run goes on."""
+    with warnings.catch_warnings(record=True):  # a plotting library's warnings are not the run's
+        warnings.simplefilter("always")
+        try:
+            from benchmark.core.plotting import write_run_figures
+
+            info = write_run_figures(problem, record, x, outdir)
+        except Exception as exc:
+            info = {"report": None, "files": [], "errors": [f"{type(exc).__name__}: {exc}"]}
+    record["figures"] = info
+    record["warnings"] += [f"figure not made ({e}); the result is unaffected" for e in info.get("errors", [])]
+    with contextlib.suppress(Exception):
+        write_text_atomic(outdir / "result.json", json.dumps(record, indent=2, default=_json_default) + "\n")
+
+
+def _result_from_record(record: dict) -> OptimizeResult:
+    searched = record.get("searched")
+    return OptimizeResult(
+        x=None if searched is None else np.array(list(searched.values()), dtype=float),
+        fun=record["cost_optimizer"] if record.get("cost_optimizer") is not None else math.inf,
+        nfev=int(record["evaluations_optimizer"]), nit=int(record["nit"]), status=Status(record["status"]),
+        message=str(record["message"]), optimizer=str(record["optimizer"]), seed=int(record["seed"]),
+        wall_time_s=float(record.get("wall_time_optimizer_s") or math.nan), traceback=record.get("traceback"),
+    )
+
+
+def _finite_or_none(x):
+    return float(x) if x is not None and math.isfinite(x) else None
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    return str(o)
+
+
+def format_table(record: dict) -> str:
+    """The short table printed after a run: parameter, estimate, truth, error."""
+    est, truth, err = record["estimate"] or {}, record["truth"] or {}, record["rel_error"] or {}
+    lines = [f"{'parameter':<10}{'estimate':>14}{'truth':>14}{'error':>10}"]
+    for k, v in est.items():
+        t = f"{truth[k]:14.6g}" if k in truth else f"{'-':>14}"
+        e = f"{100 * err[k]:+9.3f}%" if k in err else f"{'-':>10}"
+        lines.append(f"{k:<10}{v:14.6g}{t}{e}")
+    cost = record["cost"]
+    lines.append(
+        f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}, "
+        f"cost {cost if cost is None else f'{cost:.6g}'}, {record['evaluations']} evaluations, "
+        f"{record['wall_time_s']:.2f} s"
+    )
+    if record["status"] in (Status.FAILED.value, Status.TIMEOUT.value):
+        lines.append(f"{record['status']}: {record['message']}")
+    return "\n".join(lines)

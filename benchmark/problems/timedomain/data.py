@@ -1,0 +1,350 @@
+"""Time-domain data sets (``kind: startup``, MODEL.md section 7): load, validate, write.
+
+A folder holds ``meta.yaml``, one or more ``startup*.csv`` and optionally ``stop*.csv``.
+Start-up columns: ``t``; voltages ``v_alpha, v_beta`` or phase ``v_r, v_s, v_t``; currents
+``i_alpha, i_beta`` or phase ``i_r, i_s`` (the third from a zero sum); ``speed``, mechanical
+rad/s. Phase quantities are turned into alpha-beta with the amplitude-invariant Clarke
+transform (:func:`benchmark.problems.timedomain.frames.clarke`). Stop columns: ``t``, ``speed``.
+
+Each record may instead be a MATLAB file, ``startup*.mat`` / ``stop*.mat`` (versions 4 to 7),
+holding vectors named like the columns (:func:`benchmark.core.matfiles.read_mat_table`); a record
+name given both as ``.csv`` and ``.mat`` is refused. ``speed_unit`` in ``meta.yaml`` (``rad/s``,
+the default, or ``rpm``) says how the speed columns are written; rpm is converted on load
+(``rad/s = rpm * pi / 30``), so a data set always holds rad/s.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from benchmark.core.errors import DataError, DataWarning
+from benchmark.core.io import write_table_atomic, write_yaml_atomic
+from benchmark.core.matfiles import read_mat_table
+from benchmark.core.tables import (
+    _did_you_mean,
+    _short_repr,
+    check_meta_type,
+    check_time_column,
+    read_meta,
+    read_table,
+)
+from benchmark.problems.timedomain.frames import clarke
+
+VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"))
+CURRENT_COLUMNS = (("i_alpha", "i_beta"), ("i_r", "i_s"))
+
+#: A mechanical speed above this (rad/s, about 15 000 rpm) is implausible for a motor in
+#: this benchmark; a column that exceeds it is probably in rpm.
+PLAUSIBLE_SPEED_LIMIT = 1600.0
+#: A speed above this multiple of the synchronous speed (plus 1 rad/s) cannot come from a
+#: motor starting on its supply (see :func:`_check_speed_plausibility`).
+SYNC_SPEED_MARGIN = 1.5
+#: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
+META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
+             "inertia", "speed_unit", "description")
+#: Units the speed columns may be written in (``speed_unit`` in meta.yaml; rad/s by default).
+SPEED_UNITS = ("rad/s", "rpm")
+#: File types a record may be stored in, read by these table readers.
+RECORD_READERS = {".csv": read_table, ".mat": read_mat_table}
+MAX_POLE_PAIRS = 100
+
+
+@dataclass
+class StartupRecord:
+    """One start-up record, alpha-beta (amplitude-invariant), SI units.
+
+    Attributes: t (s), v_alpha, v_beta (V), i_alpha, i_beta (A), speed (mechanical rad/s).
+    """
+
+    t: np.ndarray
+    v_alpha: np.ndarray
+    v_beta: np.ndarray
+    i_alpha: np.ndarray
+    i_beta: np.ndarray
+    speed: np.ndarray
+    source: str = "memory"
+
+
+@dataclass
+class StopRecord:
+    """One free-stop record: t (s, from supply removal), speed (mechanical rad/s)."""
+
+    t: np.ndarray
+    speed: np.ndarray
+    source: str = "memory"
+
+
+@dataclass
+class StartupDataset:
+    """A time-domain data set: what ``meta.yaml`` says plus its records.
+
+    Attributes
+    ----------
+    pole_pairs : pole pairs p.
+    sample_time : sample time of the start-up records, s.
+    input_hold : ``zoh`` (switch-state voltages) or ``linear`` (sampled continuous voltages).
+    dc_link_voltage, supply_frequency, inertia : V, Hz, kg m^2, or None when not given.
+    """
+
+    pole_pairs: int
+    sample_time: float
+    startups: list[StartupRecord]
+    stops: list[StopRecord] = field(default_factory=list)
+    input_hold: str = "linear"
+    dc_link_voltage: float | None = None
+    supply_frequency: float | None = None
+    inertia: float | None = None
+    folder: str | None = None
+
+    def meta(self) -> dict:
+        m = {
+            "kind": "startup",
+            "pole_pairs": int(self.pole_pairs),
+            "sample_time": float(self.sample_time),
+            "input_hold": self.input_hold,
+        }
+        for key in ("dc_link_voltage", "supply_frequency", "inertia"):
+            if getattr(self, key) is not None:
+                m[key] = float(getattr(self, key))
+        return m
+
+
+def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupDataset:
+    """Read and validate a ``kind: startup`` folder. Raises DataError naming file/column/row;
+    data that load but look wrong (a speed that may be in rpm, unknown ``meta.yaml`` keys,
+    unused columns) raise a :class:`benchmark.core.errors.DataWarning`. ``max_bytes`` overrides the
+    table size limit (:func:`benchmark.core.tables.max_table_bytes`)."""
+    folder = Path(folder)
+    meta = read_meta(folder, {"pole_pairs": int, "sample_time": float})
+    meta_path = folder / "meta.yaml"
+    kind = meta.get("kind", "startup")
+    if kind != "startup":
+        raise DataError(meta_path, f"kind is {kind!r}; this problem reads 'startup' data sets")
+    unknown = [str(k) for k in meta if k not in META_KEYS]
+    if unknown:
+        hints = "".join(_did_you_mean(k, META_KEYS) for k in unknown)
+        warnings.warn(DataWarning.at(meta_path, f"unknown key(s) {unknown} ignored{hints}; known keys: "
+                                                f"{list(META_KEYS)}"), stacklevel=2)
+    p = meta["pole_pairs"]
+    if not 1 <= p <= MAX_POLE_PAIRS:
+        raise DataError(meta_path, f"key 'pole_pairs' must be between 1 and {MAX_POLE_PAIRS}, got {p}")
+    ts = float(meta["sample_time"])
+    if not ts > 0:
+        raise DataError(meta_path, f"key 'sample_time' must be > 0 s, got {ts}")
+    hold = meta.get("input_hold", "linear")
+    if not isinstance(hold, str) or hold not in ("zoh", "linear"):
+        raise DataError(meta_path, f"key 'input_hold' must be 'zoh' or 'linear', got {_short_repr(hold)}")
+    unit = _speed_unit(meta_path, meta.get("speed_unit", "rad/s"))
+    optional = {}
+    for key in ("dc_link_voltage", "supply_frequency", "inertia"):
+        if meta.get(key) is not None:
+            meta[key] = check_meta_type(meta_path, key, meta[key], float)
+            if not meta[key] > 0:
+                raise DataError(meta_path, f"key '{key}' must be > 0, got {meta[key]}")
+            optional[key] = float(meta[key])
+
+    startup_files = _record_files(folder, "startup")
+    if not startup_files:
+        raise DataError(folder, "no startup*.csv (or startup*.mat) file: a time-domain data set needs at least "
+                                "one start-up record")
+    startups = [_read_startup(f, ts, max_bytes, speed_unit=unit) for f in startup_files]
+    stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
+    _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
+    return StartupDataset(
+        pole_pairs=p,
+        sample_time=ts,
+        startups=startups,
+        stops=stops,
+        input_hold=hold,
+        folder=str(folder),
+        **optional,
+    )
+
+
+def _record_files(folder: Path, prefix: str) -> list[Path]:
+    """``prefix*.csv`` and ``prefix*.mat`` in name order (also folders and broken links with
+    such names, which the table reader then reports). The same record name as both CSV and
+    MAT (``startup.csv`` and ``startup.mat``) is a DataError: it would be read twice."""
+    files = sorted(f for ext in RECORD_READERS for f in folder.glob(f"{prefix}*{ext}"))
+    seen: dict[str, Path] = {}
+    for f in files:
+        if f.stem in seen:
+            raise DataError(folder, f"{seen[f.stem].name} and {f.name} hold the same record: keep one of them "
+                                    "(each file is one record)")
+        seen[f.stem] = f
+    return files
+
+
+def rpm_to_rad_per_s(speed) -> np.ndarray:
+    """Mechanical speed in rpm -> rad/s: ``rpm * pi / 30``."""
+    return np.asarray(speed, float) * np.pi / 30
+
+
+def _speed_unit(meta_path: Path, value) -> str:
+    """``speed_unit`` of meta.yaml: ``rad/s`` or ``rpm`` (any case), else a DataError."""
+    unit = value.strip().lower() if isinstance(value, str) else None
+    if unit not in SPEED_UNITS:
+        hint = _did_you_mean(str(value), SPEED_UNITS) if isinstance(value, str) else ""
+        raise DataError(meta_path, f"key 'speed_unit' must be one of {list(SPEED_UNITS)}, got "
+                                   f"{_short_repr(value)}{hint}")
+    return unit
+
+
+def _read_records_table(path: Path, alternatives, max_bytes: int | None):
+    reader = RECORD_READERS.get(path.suffix.lower(), read_table)
+    return reader(path, alternatives, max_bytes=max_bytes, warn_unused=True)
+
+
+def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, *,
+                  speed_unit: str = "rad/s") -> StartupRecord:
+    alternatives = [("t", *v, *i, "speed") for v in VOLTAGE_COLUMNS for i in CURRENT_COLUMNS]
+    df, cols = _read_records_table(path, alternatives, max_bytes)
+    t = df["t"].to_numpy()
+    step = check_time_column(path, t)
+    if abs(step - sample_time) > 1e-3 * sample_time:
+        ratio = step / sample_time
+        hint = ""
+        for factor, unit in ((1e3, "ms"), (1e6, "us")):
+            if abs(ratio / factor - 1) < 0.01:
+                hint = f" (is t in {unit}? t must be in seconds)"
+        raise DataError(
+            path, f"time step {step:.6g} s differs from meta.yaml sample_time {sample_time:.6g} s{hint}",
+            column="t"
+        )
+    with np.errstate(all="ignore"):
+        if "v_alpha" in cols:
+            v_a, v_b = df["v_alpha"].to_numpy(), df["v_beta"].to_numpy()
+        else:
+            v_a, v_b = clarke(df["v_r"], df["v_s"], df["v_t"])
+        if "i_alpha" in cols:
+            i_a, i_b = df["i_alpha"].to_numpy(), df["i_beta"].to_numpy()
+        else:
+            i_r, i_s = df["i_r"].to_numpy(), df["i_s"].to_numpy()
+            i_a, i_b = clarke(i_r, i_s, -i_r - i_s)
+    for name, x, source in (("v_alpha", v_a, "v_r, v_s, v_t"), ("v_beta", v_b, "v_r, v_s, v_t"),
+                             ("i_alpha", i_a, "i_r, i_s"), ("i_beta", i_b, "i_r, i_s")):
+        if not np.all(np.isfinite(x)):
+            k = int(np.argmax(~np.isfinite(x)))
+            raise DataError(path, f"phase values too large: {name} computed from columns {source} overflows "
+                                  "in the Clarke transform", row=k + 1)
+    speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
+    return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed,
+                         source=str(path))
+
+
+def _read_stop(path: Path, max_bytes: int | None = None, *, speed_unit: str = "rad/s") -> StopRecord:
+    df, _ = _read_records_table(path, [("t", "speed")], max_bytes)
+    t = df["t"].to_numpy()
+    check_time_column(path, t)
+    speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
+    return StopRecord(t=t - t[0], speed=speed, source=str(path))
+
+
+def _speed_in_rad_per_s(path: Path, speed: np.ndarray, unit: str) -> np.ndarray:
+    if unit == "rpm":
+        speed = rpm_to_rad_per_s(speed)
+    _check_speed(path, speed, unit)
+    return speed
+
+
+def _check_speed(path: Path, speed: np.ndarray, unit: str = "rad/s") -> None:
+    """Hard limit: beyond :data:`PLAUSIBLE_SPEED_LIMIT` no motor of this benchmark turns."""
+    k = int(np.argmax(np.abs(speed)))
+    if abs(speed[k]) > PLAUSIBLE_SPEED_LIMIT:
+        if unit == "rpm":
+            msg = (f"speed {speed[k] * 30 / np.pi:.6g} rpm ({speed[k]:.6g} rad/s) is implausible (above "
+                   f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; meta.yaml declares speed_unit: rpm)")
+        else:
+            msg = (f"speed {speed[k]:.6g} is implausible in rad/s (above {PLAUSIBLE_SPEED_LIMIT:.0f} rad/s, "
+                   f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; is the column in rpm? rad/s = rpm * pi / 30, "
+                   "or declare speed_unit: rpm in meta.yaml)")
+        raise DataError(path, msg, column="speed", row=k + 1)
+
+
+def synchronous_speed_estimate(rec: StartupRecord, pole_pairs: int, sample_time: float) -> float:
+    """Mechanical synchronous speed (rad/s) estimated from the rotation of the current phasor:
+    the fastest mean rotation over ten windows of the record (0 if it cannot be told)."""
+    i = rec.i_alpha + 1j * rec.i_beta
+    n = len(i)
+    if n < 20:
+        return 0.0
+    mag = np.abs(i)
+    if not mag.max() > 0:
+        return 0.0
+    phase = np.unwrap(np.angle(i))
+    best = 0.0
+    edges = np.linspace(0, n - 1, 11).astype(int)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if b - a < 2 or np.median(mag[a:b + 1]) < 0.05 * mag.max():
+            continue
+        best = max(best, abs(phase[b] - phase[a]) / ((b - a) * sample_time))
+    return best / pole_pairs
+
+
+def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
+                              supply_frequency: float | None, speed_unit: str = "rad/s") -> None:
+    """Speed against the synchronous speed ``2 pi f / p``: an induction motor starting on its
+    supply with no driving load cannot run much above it (the start-up overshoot stays well
+    below: about 20 % for an 8-pole variant of the paper motor). With ``supply_frequency`` in
+    meta.yaml the check is strict: above :data:`SYNC_SPEED_MARGIN` times the synchronous
+    speed is an error. Without it, the
+    frequency is estimated from the current phasor's rotation, and exceeding the margin is
+    only a :class:`DataWarning` (the estimate can be fooled), typically a column in rpm."""
+    records = [(r.source, r.speed) for r in startups] + [(r.source, r.speed) for r in stops]
+    if supply_frequency is not None:
+        w_sync = 2 * np.pi * supply_frequency / p
+        basis = f"supply_frequency {supply_frequency:g} Hz and pole_pairs {p} in meta.yaml"
+        strict = True
+    else:
+        estimates = [synchronous_speed_estimate(r, p, float(np.median(np.diff(r.t))) if len(r.t) > 1 else 1.0)
+                     for r in startups]
+        w_sync = max(estimates) if estimates else 0.0
+        basis = (f"estimated from the rotation of the currents (about {w_sync * p / (2 * np.pi):.3g} Hz) and "
+                 f"pole_pairs {p}")
+        strict = False
+    if not w_sync > 0:
+        return
+    limit = SYNC_SPEED_MARGIN * w_sync + 1.0
+    for source, speed in records:
+        k = int(np.argmax(np.abs(speed)))
+        if abs(speed[k]) <= limit:
+            continue
+        v = float(speed[k])
+        msg = (f"speed {v:.6g} rad/s is {abs(v) / w_sync:.3g} times the synchronous speed {w_sync:.4g} rad/s "
+               f"({basis})")
+        as_rpm = abs(v) * np.pi / 30
+        rpm_hint = (f"; if the column is in rpm, convert it: rad/s = rpm * pi / 30 ({abs(v):.6g} rpm = "
+                    f"{as_rpm:.4g} rad/s), or declare speed_unit: rpm in meta.yaml")
+        if speed_unit == "rpm":
+            rpm_hint = " (meta.yaml declares speed_unit: rpm; the speed above is after conversion)"
+        if strict:
+            raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
+                            + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)
+        warnings.warn(DataWarning.at(source, "looks like rpm, not rad/s: " + msg + rpm_hint
+                                     + " (give supply_frequency in meta.yaml to make this an error)",
+                                     column="speed", row=k + 1), stacklevel=3)
+
+
+def write_startup_dataset(folder, ds: StartupDataset, truth: dict | None = None) -> Path:
+    """Write a data set in the section 7 format (alpha-beta columns); ``truth`` -> truth.yaml."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, r in enumerate(ds.startups):
+        name = "startup.csv" if len(ds.startups) == 1 else f"startup_{k + 1}.csv"
+        write_table_atomic(
+            folder / name,
+            {"t": r.t, "v_alpha": r.v_alpha, "v_beta": r.v_beta, "i_alpha": r.i_alpha, "i_beta": r.i_beta,
+             "speed": r.speed},
+            float_format="%.17g",
+        )
+    for k, r in enumerate(ds.stops):
+        name = "stop.csv" if len(ds.stops) == 1 else f"stop_{k + 1}.csv"
+        write_table_atomic(folder / name, {"t": r.t, "speed": r.speed}, float_format="%.17g")
+    write_yaml_atomic(folder / "meta.yaml", ds.meta())
+    if truth is not None:
+        write_yaml_atomic(folder / "truth.yaml", truth)
+    return folder

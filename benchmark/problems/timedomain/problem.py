@@ -1,0 +1,390 @@
+"""The time-domain identification problem of Alonge et al. (MODEL.md sections 3-4).
+
+Cost (eqs. 13-15), summed over every start-up record of the data set::
+
+    f = sum_j ka e(i_a,j) + kb e(i_b,j) + kw e(w_j),  e(x) = |x_meas - x_sim|^exponent
+
+with ``exponent`` 1 (eq. 15) or 2 (eq. 14); ``w`` is the mechanical speed in rad/s.
+
+Searched parameters: ``Rs, Ls, Le, Rr, J`` when a stop record fixes ``tau_m`` and ``fc/J``
+(then ``fv = J/tau_m`` and ``fc = J*(fc/J)`` follow for each candidate); ``J`` is dropped when
+the inertia is known; with no stop record ``fv`` and ``fc`` are searched too (less precisely:
+they then come from the start-up alone).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from benchmark.core.errors import ConfigError, DataError
+from benchmark.core.problem import Problem
+from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.filters import zero_phase_lowpass
+from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
+from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
+from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
+from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
+
+
+class TimeDomainProblem(Problem):
+    """Start-up record fit. See the module docstring for the cost and the searched set.
+
+    Parameters
+    ----------
+    dataset : the (conditioned) data set.
+    lower, upper : bounds of the searched parameters, in :attr:`parameter_names` order.
+    mechanical : free-stop estimate fixing ``tau_m`` and ``fc/J``, or None (then ``fv``, ``fc``
+        are searched).
+    inertia : known inertia (kg m^2), or None to search ``J``.
+    exponent : 1 (eq. 15) or 2 (eq. 14).
+    weights : (ka, kb, kw).
+    truth : true parameters for scoring, or None.
+    """
+
+    name = "timedomain"
+
+    def __init__(self, dataset: StartupDataset, lower, upper, mechanical: MechanicalEstimate | None = None,
+                 inertia: float | None = None, exponent: int = 1, weights=(1.0, 1.0, 0.5),
+                 truth: dict | None = None):
+        if exponent not in (1, 2):
+            raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent}")
+        self.dataset = dataset
+        self.mechanical = mechanical
+        self.inertia = inertia
+        self.exponent = int(exponent)
+        self.weights = np.asarray(weights, dtype=float)
+        if self.weights.shape != (3,) or np.any(self.weights < 0) or not np.any(self.weights > 0):
+            raise ConfigError(f"problem.cost.weights: need three non-negative weights, got {weights}")
+        names = ["Rs", "Ls", "Le", "Rr"]
+        if inertia is None:
+            names.append("J")
+        if mechanical is None:
+            names += ["fv", "fc"]
+        self.parameter_names = tuple(names)
+        self.lower = np.asarray(lower, dtype=float)
+        self.upper = np.asarray(upper, dtype=float)
+        self.truth = truth
+        self.check_bounds()
+        self._linear = hold_is_linear(dataset.input_hold)
+        self._records = [
+            (np.ascontiguousarray(r.v_alpha), np.ascontiguousarray(r.v_beta), np.ascontiguousarray(r.i_alpha),
+             np.ascontiguousarray(r.i_beta), np.ascontiguousarray(r.speed))
+            for r in dataset.startups
+        ]
+
+    # -- parameter vectors -------------------------------------------------------------
+    def full_parameters(self, X: np.ndarray) -> np.ndarray:
+        """Searched vectors (n, n_var) -> physical parameters (n, 7) in PARAMETER_NAMES order."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        col = {n: X[:, k] for k, n in enumerate(self.parameter_names)}
+        J = col["J"] if "J" in col else np.full(len(X), self.inertia)
+        if self.mechanical is not None:
+            fv = J / self.mechanical.tau_m
+            fc = J * self.mechanical.fc_over_J
+        else:
+            fv, fc = col["fv"], col["fc"]
+        return np.column_stack([col["Rs"], col["Ls"], col["Le"], col["Rr"], J, fv, fc])
+
+    def estimate(self, x: np.ndarray) -> dict[str, float]:
+        theta = self.full_parameters(x)[0]
+        return {n: float(v) for n, v in zip(PARAMETER_NAMES, theta, strict=True)}
+
+    # -- cost ------------------------------------------------------------------------
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        coef = coefficients(self.full_parameters(X), self.dataset.pole_pairs)
+        total = np.zeros(len(coef))
+        for v_a, v_b, i_a, i_b, w in self._records:
+            total += startup_cost_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time, i_a, i_b, w,
+                                        float(self.dataset.pole_pairs), self.weights, self.exponent)
+        return total
+
+    def simulate(self, X: np.ndarray) -> list[np.ndarray]:
+        """Simulated (i_alpha, i_beta, speed) per record: a list of (n, 3, N) arrays."""
+        coef = coefficients(self.full_parameters(X), self.dataset.pole_pairs)
+        return [startup_outputs_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time,
+                                      float(self.dataset.pole_pairs))
+                for v_a, v_b, *_ in self._records]
+
+    def residuals_batch(self, X: np.ndarray) -> np.ndarray:
+        """Weighted residuals ``sqrt(k) (x_meas - x_sim)`` of each candidate: (n, 3*N_total).
+        Their sum of squares is the eq. 14 cost with the same weights."""
+        parts = []
+        sw = np.sqrt(self.weights)[None, :, None]
+        for sim, (_, _, i_a, i_b, w) in zip(self.simulate(X), self._records, strict=True):
+            meas = np.stack([i_a, i_b, w])[None]
+            parts.append((sw * (meas - sim)).reshape(len(sim), -1))
+        r = np.concatenate(parts, axis=1)
+        return np.where(np.isfinite(r), r, np.nan)
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        return self.residuals_batch(np.asarray(x, float)[None, :])[0]
+
+    def cost_from_residuals(self, r: np.ndarray) -> float:
+        if self.exponent == 2:
+            return float(r @ r)
+        # r = sqrt(k) e record by record (channel-major), so k |e| = sqrt(k) |r|
+        total = 0.0
+        offset = 0
+        for _, _, i_a, *_ in self._records:
+            m = len(i_a)
+            block = r[offset:offset + 3 * m].reshape(3, m)
+            total += float(np.sqrt(self.weights) @ np.abs(block).sum(axis=1))
+            offset += 3 * m
+        return total
+
+    @property
+    def cost_unit(self) -> str:
+        """What the cost is measured in (figure labels)."""
+        return "eq. 15: weighted |error|, A and rad/s" if self.exponent == 1 else "eq. 14: weighted squared error"
+
+    def plots(self, x, record: dict) -> list:
+        """This problem's figures of a run (not yet drawn): see :mod:`benchmark.problems.timedomain.figures`."""
+        from benchmark.problems.timedomain.figures import timedomain_plots
+
+        return timedomain_plots(self, x, record)
+
+    def describe(self) -> dict:
+        d = {
+            "data": self.dataset.folder or "synthetic (in memory)",
+            "records": len(self._records),
+            "samples": int(sum(len(r[0]) for r in self._records)),
+            "sample_time": self.dataset.sample_time,
+            "input_hold": self.dataset.input_hold,
+            "cost": {"exponent": self.exponent, "weights": dict(zip(WEIGHT_KEYS, self.weights.tolist(), strict=True))},
+        }
+        if self.mechanical is not None:
+            m = self.mechanical
+            d["mechanical"] = {"case": m.case, "tau_m": m.tau_m, "fc_over_J": m.fc_over_J, "w0": m.w0,
+                               "t_free": m.t_free}
+        if self.inertia is not None:
+            d["inertia_known"] = self.inertia
+        return d
+
+
+# -- bounds --------------------------------------------------------------------------
+def derive_bounds(ds: StartupDataset, names: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+    """Search bounds from the data alone, for a motor with no preset.
+
+    From the last fifth of the first start-up (near no-load steady state) the fundamental
+    voltage ``V1`` and current ``I0`` give the no-load reactance ``V1/I0 ~ w_e Ls``; the peak
+    start-up current ``I_pk`` gives the short-circuit impedance ``Z_sc = V1/I_pk ~
+    |Rs + Rr' + j w_e Le|``. The energy delivered during the start-up bounds the inertia
+    (``J <= 2 E_in / w_M^2``), and the input power at the end bounds the friction.
+    Each range spans well over a decade around these rough values, so that motors from
+    0.5 kW to 200 kW identify without hand-set bounds. Returns ``{name: (low, high)}``.
+    """
+    r = ds.startups[0]
+    n = len(r.t)
+    tail = slice(int(0.8 * n), n)
+    v = r.v_alpha + 1j * r.v_beta
+    i = r.i_alpha + 1j * r.i_beta
+    t = r.t
+    # electrical supply frequency from the voltage phasor's rotation over the tail
+    phase = np.unwrap(np.angle(v[tail]))
+    w_e = abs(np.polyfit(t[tail], phase, 1)[0])
+    if not w_e > 0:
+        raise ConfigError("bounds: cannot derive bounds: the start-up voltage does not rotate; give bounds=...")
+    rot = np.exp(-1j * w_e * t[tail])
+    V1 = abs(np.mean(v[tail] * rot))
+    I0 = abs(np.mean(i[tail] * rot))
+    I_pk = float(np.max(np.abs(i)))
+    Ls0 = V1 / (I0 * w_e)
+    Z_sc = V1 / I_pk
+    Le0 = Z_sc / w_e
+    w_end = float(np.mean(r.speed[tail]))
+    power = 1.5 * (r.v_alpha * r.i_alpha + r.v_beta * r.i_beta)
+    E_in = float(np.sum(power) * ds.sample_time)
+    J_max = 2.0 * E_in / max(w_end, 1e-9) ** 2
+    P_end = max(float(np.mean(power[tail])), 1e-9)
+    bounds = {
+        "Rs": (Z_sc / 100.0, 2.0 * Z_sc),
+        "Rr": (Z_sc / 100.0, 2.0 * Z_sc),
+        "Ls": (Ls0 / 3.0, 3.0 * Ls0),
+        "Le": (Le0 / 20.0, 1.5 * Le0),
+        "J": (J_max / 50.0, J_max),
+        "fv": (0.0, P_end / w_end**2),
+        "fc": (0.0, P_end / w_end),
+    }
+    return {k: bounds[k] for k in names}
+
+
+# -- set-up from typed settings ---------------------------------------------------------
+def setup_problem(settings: TimeDomainSettings, dataset: StartupDataset, truth_doc: dict | None) -> TimeDomainProblem:
+    """The problem for a data set (``truth_doc``: the synthetic truth document, read only for
+    scoring; None for measured data)."""
+    truth = None if truth_doc is None else truth_doc.get("parameters")
+    return problem_from_dataset(settings, dataset, truth)
+
+
+def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth: dict | None) -> TimeDomainProblem:
+    """Conditioning, mechanical pre-identification from the stop record, bounds, and the problem."""
+    ds = condition(ds, speed_filter=settings.speed_filter)
+    mechanical = None
+    if ds.stops:
+        stop = ds.stops[0]
+        mechanical = fit_free_stop(stop.t, stop.speed, case=settings.friction_case, source=stop.source)
+    inertia = ds.inertia if ds.inertia is not None else settings.known_inertia
+    names = ["Rs", "Ls", "Le", "Rr"] + (["J"] if inertia is None else []) + ([] if mechanical else ["fv", "fc"])
+    bounds = _choose_bounds(settings, names, ds)
+    return TimeDomainProblem(
+        ds,
+        lower=[bounds[n][0] for n in names],
+        upper=[bounds[n][1] for n in names],
+        mechanical=mechanical,
+        inertia=inertia,
+        exponent=settings.exponent,
+        weights=list(settings.weights),
+        truth=truth,
+    )
+
+
+#: Sign each parameter's bounds must respect: > 0 ("positive") or >= 0 ("non-negative").
+PARAMETER_SIGNS = {"Rs": "positive", "Ls": "positive", "Le": "positive", "Rr": "positive", "J": "positive",
+                   "fv": "non-negative", "fc": "non-negative"}
+
+
+def check_config(run) -> None:
+    """Configuration checks of this problem that need no data, run by the harness before any
+    work starts (``run``: the resolved run configuration): ``bounds`` names and values,
+    ``problem.cost``, ``problem.friction_case``, ``problem.stator_resistance``."""
+    user = run.get("bounds")
+    if user is not None:
+        if not hasattr(user, "items"):
+            raise ConfigError(f"bounds: expected a mapping {{name: [low, high]}}, got {user!r}")
+        unknown = sorted(str(k) for k in user if k not in PARAMETER_NAMES)
+        if unknown:
+            raise ConfigError(f"bounds: unknown parameter(s) {unknown}; valid: {list(PARAMETER_NAMES)}")
+        for n, val in user.items():
+            _check_pair(f"bounds.{n}", n, val)
+    pcfg = run.get("problem") or {}
+    cost = pcfg.get("cost") or {}
+    exponent = cost.get("exponent", 1)
+    if isinstance(exponent, bool) or exponent not in (1, 2):
+        raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent!r}")
+    weights = cost.get("weights") or {}
+    if not hasattr(weights, "items"):
+        raise ConfigError(f"problem.cost.weights: expected a mapping {{channel: weight}}, got {weights!r}")
+    for k, w in weights.items():
+        if k not in WEIGHT_KEYS:
+            raise ConfigError(f"problem.cost.weights.{k}: unknown channel; valid: {list(WEIGHT_KEYS)}")
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not math.isfinite(w) or w < 0:
+            raise ConfigError(f"problem.cost.weights.{k}: must be a non-negative number, got {w!r}")
+    case = pcfg.get("friction_case", 2)
+    if isinstance(case, bool) or case not in (1, 2):
+        raise ConfigError(f"problem.friction_case: must be 1 (no Coulomb friction) or 2 (with), got {case!r}")
+    rs = pcfg.get("stator_resistance", "free")
+    if rs not in ("free", "prior", "fixed"):
+        raise ConfigError(f"problem.stator_resistance: must be free, prior or fixed, got {rs!r}")
+
+
+def _check_pair(src: str, name: str, val) -> tuple[float, float]:
+    """``[low, high]`` -> floats, or a ConfigError naming ``src``: two finite numbers, low <
+    high, and the parameter's physical sign."""
+    if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) != 2:
+        raise ConfigError(f"{src}: expected [low, high], got {val!r}")
+    if any(isinstance(v, bool) for v in val):
+        raise ConfigError(f"{src}: expected two numbers [low, high], got {list(val)!r}")
+    try:
+        lo, hi = (float(v) for v in val)
+    except (TypeError, ValueError, OverflowError):
+        raise ConfigError(f"{src}: expected two numbers [low, high], got {list(val)!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ConfigError(f"{src}: bounds must be finite numbers, got [{lo}, {hi}]")
+    if lo >= hi:
+        raise ConfigError(f"{src}: low {lo} >= high {hi} (did you swap low and high?)")
+    sign = PARAMETER_SIGNS.get(name)
+    if sign == "positive" and lo <= 0:
+        raise ConfigError(f"{src}: {name} must be positive; low bound {lo} is not physical")
+    if sign == "non-negative" and lo < 0:
+        raise ConfigError(f"{src}: {name} cannot be negative; low bound {lo} is not physical")
+    return lo, hi
+
+
+def _choose_bounds(settings: TimeDomainSettings, names, ds) -> dict:
+    user, preset_bounds = settings.bounds, settings.preset_bounds
+    if user is not None:
+        unknown = set(user) - set(names)
+        if unknown:
+            raise ConfigError(f"bounds: unknown parameter(s) {sorted(unknown)}; searched here: {names}"
+                              + _not_searched_hint(unknown, names))
+    out = {}
+    derived = None
+    for n in names:
+        if user is not None and n in user:
+            src, val = f"bounds.{n}", user[n]
+        elif preset_bounds is not None and n in preset_bounds:
+            src, val = f"motor.bounds.{n}", preset_bounds[n]
+        else:
+            if derived is None:
+                derived = _derive_or_explain(ds, tuple(names))
+            src, val = f"bounds.{n} (derived from data: give bounds.{n}=[low,high] to override)", derived[n]
+        out[n] = _check_pair(src, n, val)
+    return out
+
+
+def _not_searched_hint(unknown, names) -> str:
+    fixed = sorted(set(unknown) & set(PARAMETER_NAMES))
+    if not fixed:
+        return ""
+    return (f" ({fixed} not searched: fv and fc follow from the stop record, J from a known inertia)")
+
+
+def _derive_or_explain(ds, names) -> dict:
+    """:func:`derive_bounds`, with a failure turned into a ConfigError that says what to give."""
+    try:
+        with np.errstate(all="ignore"):
+            derived = derive_bounds(ds, names)
+    except ConfigError:
+        raise
+    except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError, IndexError) as exc:
+        raise ConfigError(f"bounds: cannot derive bounds from the data ({type(exc).__name__}: {exc}); "
+                          f"give bounds for {list(names)}, e.g. bounds={{Rs:[0.1,10]}}") from None
+    return derived
+
+
+def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
+    """Paper conditioning of the start-up speed (optional, see README): zero-phase low-pass."""
+    if not speed_filter:
+        return ds
+    from dataclasses import replace
+
+    return replace(ds, startups=[replace(r, speed=zero_phase_lowpass(r.speed, ds.sample_time))
+                                 for r in ds.startups])
+
+
+def read_truth_for_scoring(folder) -> dict | None:
+    """The true parameters of a synthetic data set, read only to score errors.
+
+    A malformed truth.yaml only costs the scoring: it raises DataError naming the file, since
+    a user who put it there expects errors to be scored."""
+    path = Path(folder) / "truth.yaml"
+    if not path.is_file():
+        return None
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
+    except (yaml.YAMLError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise DataError(path, f"not valid YAML: {str(exc).splitlines()[0]}") from None
+    params = doc.get("parameters") if isinstance(doc, dict) else None
+    if not isinstance(params, dict):
+        raise DataError(path, "needs a mapping 'parameters' of true values (or remove the file)")
+    out = {}
+    for k, v in params.items():
+        if k not in PARAMETER_NAMES:
+            continue
+        try:
+            value = float(v)
+        except (TypeError, ValueError):
+            raise DataError(path, f"parameters.{k} must be a number, got {v!r}") from None
+        if math.isfinite(value):
+            out[k] = value
+    return out
+
+
+def read_truth_document(folder) -> dict | None:
+    """``{"parameters": ...}`` of a synthetic data set's truth.yaml, or None (scoring only)."""
+    params = read_truth_for_scoring(folder)
+    return None if params is None else {"parameters": params}
