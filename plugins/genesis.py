@@ -1,9 +1,10 @@
 """GENESIS 5.0 (Grefenstette 1990), a clean-room clone, as an optimiser plugin.
 
 The clone reproduces the trajectory of the original program bit for bit (same ``out`` lines,
-same ``min`` list) for the same settings, template, seed and objective. It was written from the
-behaviour described in ``shared/spec/GENESIS.md`` and checked against the original's worked
-example ``genesis_vectors/ex1`` (reproduced byte for byte, see ``tests/test_genesis.py``).
+same ``min`` list) for the same settings, template, seed and objective. It is checked against the
+original's own worked example (``f = x1^2 + x2^2 + x3^2``), kept with its settings, template and
+the ``out`` and ``min`` files the original wrote in ``tests/plugins/genesis_vectors/ex1/`` (``ex1``
+below) and reproduced byte for byte by ``tests/plugins/test_genesis.py``.
 
 Two ways to use it
 ------------------
@@ -14,12 +15,73 @@ Two ways to use it
 
       python -m plugins.genesis DIR                    # objective: x1^2 + x2^2 + ... (sum of squares)
       python -m plugins.genesis DIR module:function    # objective: module.function(x) -> float
+      python -m plugins.genesis DIR --out-dir OUTDIR   # write out/min to OUTDIR instead of DIR
 
-  reads ``DIR/in`` and ``DIR/template`` in the original formats and writes ``DIR/out`` and
-  ``DIR/min`` as the original does. ``module:function`` is imported with ``importlib`` (the current
-  directory is on the path); the function receives the decoded genes as a 1-D float64 numpy
-  vector and returns a float. Bad input (missing file, malformed line, bad value, unimportable
-  objective) prints one line naming the file and line and exits with status 2.
+  reads ``DIR/in`` and ``DIR/template`` in the original formats and writes ``out`` and ``min``
+  into ``DIR`` as the original does (into ``OUTDIR``, created if missing, with ``--out-dir``),
+  then prints one summary line. ``plugins/genesis_example/`` is a small ready-made ``DIR``.
+  ``module:function`` is imported with ``importlib`` (the current directory is on the path); the
+  function receives the decoded genes as a 1-D float64 numpy vector and returns a float. Bad
+  input (missing file, malformed line, bad value, unimportable objective) prints one line naming
+  the file and line and exits with status 2.
+
+The original's files
+--------------------
+``in``: 16 lines ``Label = value``, in this order (the original's defaults in brackets; the
+labels are matched ignoring case and repeated blanks, blank lines are skipped)::
+
+           Experiments = 1          [1]
+          Total Trials = 1000       [1000]    stop once this many evaluations were made
+       Population Size = 50         [50]      N
+      Structure Length = 30         [30]      L, bits per structure (= the template's bits)
+        Crossover Rate = 0.6        [0.6]
+         Mutation Rate = 0.001      [0.001]   per bit; a mutated bit is redrawn, so it flips half the time
+        Generation Gap = 1.0        [1.0]     share of the population replaced each generation
+        Scaling Window = 5          [5]       generations over which the worst cost is remembered
+       Report Interval = 200        [100]     trials between two ``out`` lines
+      Structures Saved = 5          [10]      length of the ``min`` list
+     Max Gens w/o Eval = 2          [2]       stop after this many generations without a trial
+         Dump Interval = 0          [0]       (checkpoints: ignored by the clone)
+           Dumps Saved = 0          [0]       (ignored)
+               Options = acefgL     [cefgl]   option letters, see below
+           Random Seed = 123456789  [123456789]
+              Rank Min = 0.75       [0.75]    expected count of the worst structure with ``R``
+
+Options: ``a`` evaluate every structure each generation (unchanged copies cost a trial too);
+``c`` collect statistics and convergence measures (``out`` lines with Lost/Conv/Bias, and the
+``Bias > 0.99`` stop); ``C`` statistics only; ``e`` elitist; ``f`` floating-point genes from the
+``template``; ``g`` Gray code (with ``f``); ``M`` maximise (default: minimise); ``R`` rank
+selection (default: proportional). ``l``, ``L``, ``d``, ``o``, ``O``, ``b``, ``D``, ``I``, ``s``,
+``t`` and unknown letters are accepted and ignored; ``i`` and ``r`` are refused (see below).
+
+``template`` (read with option ``f``): ``genes: n``, then for each gene a ``gene k`` line and the
+lines ``min: x``, ``max: x``, ``values: v`` (a power of two) and ``format: %7.2f`` (the printf
+format of the gene in the ``min`` file); blank lines are ignored. A gene takes ``log2(values)``
+consecutive bits, most significant first (Gray-decoded first with ``g``), and the integer ``k``
+they encode gives ``min + k * (max - min) / (values - 1)``. Example::
+
+    genes: 1
+
+    gene 0
+    min: -5.12
+    max: 5.11
+    values: 1024
+    format: %7.2f
+
+``out`` (written with ``c`` or ``C``): one line per report point, in the C format
+``"%5d %5d %2d %2d %5.3f %.6e %.6e %.6e %.6e"``: generation, trials, Lost (bit positions where
+all N structures agree), Conv (positions where at most ``N // 20`` disagree), Bias (mean share
+of the majority allele), online (mean of all costs so far), offline (mean of the best-so-far
+after each trial), best cost so far, population average. Report points are generation 0 and
+each generation whose trials reach the next multiple of Report Interval. A run declared
+converged (``c`` and ``Bias > 0.99``) stops, and the original pads ``out`` with copies of the last
+line whose generation number advances by ``Report Interval // N`` per line, one line per Report
+Interval still missing before Total Trials (converged at generation 169 with 17000 of 20000
+trials at N = 100, Report Interval 1000: lines for 169, 179, 189, 199, all with 17000 trials).
+
+``min``: the best distinct structures found (Structures Saved of them, in slot order), one per
+line: each gene in its template format (without ``f``: the string of 0s and 1s), then the cost
+as ``"  %11.4e "``, then ``" %4d  %4d"`` the generation and trial at which it was first found.
 
 Random seed of the plugin
 -------------------------
@@ -39,10 +101,12 @@ cost too.
 
 Readings chosen where the description leaves room (the ones ex1 decides are marked [ex1])
 ----------------------------------------------------------------------------------------
-* RANDU: the seed is advanced first, then scaled: ``Rand() = new_seed * 0.4656612875e-9`` [ex1 and
-  the three values in GENESIS.md].
+* RANDU: ``seed = seed * 65539 mod 2**31``, advanced first, then scaled:
+  ``Rand() = new_seed * 0.4656612875e-9``; ``Randint(lo, hi) = int(lo + (hi - lo + 1) * Rand())``
+  [ex1; from 123456789 the first three ``Rand()`` are 0.7746705113383283, 0.13062164053126013,
+  0.8116952440327436].
 * Gene values: ``min + integer * step`` with ``step = (max - min) / (values - 1)`` in double
-  precision, as GENESIS.md states (ex1 does not tell it from ``min + (max - min) * i / (values - 1)``);
+  precision, as the original describes it (ex1 does not tell it from ``min + (max - min) * i / (values - 1)``);
   the runner's sum of squares is accumulated left to right from 0.0 like a C loop.
 * Mutation positions are 0-based indices into the population's bit array, so the first gap
   (>= 1) never hits bit 0 of structure 0 [ex1].
@@ -54,7 +118,7 @@ Readings chosen where the description leaves room (the ones ex1 decides are mark
   string takes the next free slot; when full it replaces the worst saved entry if strictly
   better [ex1: slot order, not sorted]. Which slot goes on a tie of worst entries (the first
   here) and whether an equal cost replaces (no here) ex1 does not decide.
-* Crossover points: ``x1 = Randint(0, L)``, ``x2 = Randint(0, L - 1)`` as GENESIS.md states
+* Crossover points: ``x1 = Randint(0, L)``, ``x2 = Randint(0, L - 1)`` as the original describes
   [ex1: ``Randint(0, L - 1)``, ``Randint(0, L - 2)`` does not reproduce it].
 * Elitist: the copy is made only when no new string equals the old best [ex1: always copying
   does not reproduce it].
@@ -64,8 +128,13 @@ Readings chosen where the description leaves room (the ones ex1 decides are mark
   were passed). No extra line is written at termination unless it is such a point.
 * ``Lost``/``Conv``/``Bias`` are computed at report points with option ``c`` only; so the
   ``Lost = L`` stop and the ``Bias > 0.99`` stop are checked there. On ``Bias > 0.99`` the report
-  line is written, then repeated unchanged once per remaining multiple of Report Interval up to
-  Total Trials, and the run stops (no reference output checks this padding).
+  line is written, then the padding lines (see "The original's files" above: same trials and
+  statistics, generation advanced by ``Report Interval // N``, at least 1, per line), and the run
+  stops. The step is the original's ``Report Interval / Population Size`` in integer arithmetic,
+  whatever the Generation Gap (with ``a`` a generation costs N trials at any gap); the number of
+  lines is ``ceil((Total Trials - trials) / Report Interval)``. ``RunResult.generations`` counts
+  the generations really evaluated, not the padded ones. (ex1 does not converge; the padding is
+  checked against the original's documented example, 169, 179, 189, 199.)
 * ``C`` without ``c``: ``out`` lines are written with Lost, Conv, Bias = 0, 0, 0.000. Neither
   ``c`` nor ``C``: no ``out`` file is written.
 * Rank selection (``R``): the population is sorted best first with a stable sort, so on ties the
@@ -76,7 +145,7 @@ Readings chosen where the description leaves room (the ones ex1 decides are mark
   ``New_worst`` only when that one is worse.
 * Mutation Rate 0: the first-gap draw is still made and no bit is ever mutated (the original's
   formula divides by log(1) = 0 there).
-* Select must take exactly N structures; GENESIS.md does not say what happens otherwise (only
+* Select must take exactly N structures; the original's description does not say what happens otherwise (only
   possible through rounding of the expected counts). The clone stops taking at N and, if short,
   fills the rest with the last structure, so a long benchmark run is not lost.
 * Experiments > 1: the experiments run one after the other on the same RANDU stream; ``out``
@@ -101,7 +170,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmark.errors import ConfigError, UserError
+from benchmark.core.errors import ConfigError, UserError
 
 __all__ = [
     "INF_COST",
@@ -331,6 +400,7 @@ class RunResult:
     best_cost: float
     best_bits: np.ndarray | None
     stop_reason: str
+    files: list[Path] = field(default_factory=list)  # written by :func:`run_dir`
 
 
 def sum_of_squares(X: np.ndarray) -> np.ndarray:
@@ -362,8 +432,7 @@ class Genesis:
         self.template = template
         if self.floating and template.length != settings.structure_length:
             raise ConfigError(
-                f"structure_length: {settings.structure_length} bits, but the template's genes "
-                f"take {template.length}"
+                f"structure_length: {settings.structure_length} bits, but the template's genes take {template.length}"
             )
         self.L = settings.structure_length
         self.N = settings.population_size
@@ -481,21 +550,10 @@ class Genesis:
                     bias = int(np.maximum(ones, N - ones).sum()) / (N * L)
                     converged = bias > 0.99
                 if s.flag("c") or s.flag("C"):
-                    line = format_out_line(
-                        self.gen,
-                        self.trials,
-                        lost,
-                        conv,
-                        bias,
-                        self.online / self.trials,
-                        self.offline / self.trials,
-                        self.best,
-                        avg,
-                    )
-                    self.out_lines.append(line)
+                    stats = (lost, conv, bias, self.online / self.trials, self.offline / self.trials, self.best, avg)
+                    self.out_lines.append(format_out_line(self.gen, self.trials, *stats))
                     if converged:
-                        pad = max(0, s.total_trials // s.report_interval - self.trials // s.report_interval)
-                        self.out_lines.extend([line] * pad)
+                        self.out_lines.extend(self._padding(stats))
 
             # termination
             if converged:
@@ -519,6 +577,26 @@ class Genesis:
             best_bits=self.best_bits,
             stop_reason=stop,
         )
+
+    def _padding(self, stats: tuple) -> list[str]:
+        """The lines the original appends to ``out`` when a run is declared converged.
+
+        ``stats`` are the statistics of the report line just written (Lost ... average). Each
+        padding line repeats that line (same trials and statistics) with the generation number
+        advanced by ``Report Interval // N`` (at least 1) per line; there is one line per Report
+        Interval still missing before Total Trials, i.e. ``ceil((Total Trials - trials) / Report
+        Interval)`` lines. At N = 100, Report Interval 1000 and 20000 trials, a run converged at
+        generation 169 (17000 trials) gets 179, 189 and 199 (the generation at which it would
+        have ended)."""
+        s = self.s
+        step = max(1, s.report_interval // self.N)
+        lines = []
+        gen, reached = self.gen, self.trials
+        while reached < s.total_trials:
+            reached += s.report_interval
+            gen += step
+            lines.append(format_out_line(gen, self.trials, *stats))
+        return lines
 
     # ---- generation steps --------------------------------------------------------------------
 
@@ -793,9 +871,7 @@ def read_template(path) -> Template:
             if values < 2 or values & (values - 1):
                 raise ValueError
         except ValueError:
-            raise GenesisInputError(
-                f"{path}: line {no}: values: expected a power of two >= 2, got {v!r}"
-            ) from None
+            raise GenesisInputError(f"{path}: line {no}: values: expected a power of two >= 2, got {v!r}") from None
         no, fmt = take("format")
         fmt = re.sub(r"%([-+ #0]*\d*(?:\.\d+)?)[lL]", r"%\1", fmt)
         if not _FMT_RE.match(fmt):
@@ -833,10 +909,16 @@ def _load_objective(spec: str) -> Callable[[np.ndarray], np.ndarray]:
     return batch
 
 
-def run_dir(directory, objective: Callable[[np.ndarray], np.ndarray] | None = None) -> RunResult:
+def run_dir(
+    directory,
+    objective: Callable[[np.ndarray], np.ndarray] | None = None,
+    out_dir=None,
+) -> RunResult:
     """Read ``directory/in`` and ``directory/template``, run, write ``out`` and ``min``.
 
-    ``objective`` maps decoded rows ``(n, n_genes)`` to costs; default :func:`sum_of_squares`."""
+    ``objective`` maps decoded rows ``(n, n_genes)`` to costs; default :func:`sum_of_squares`.
+    The files go into ``out_dir`` (created if missing) when given, else into ``directory`` as the
+    original does; ``out`` only with option ``c`` or ``C``. Their paths are in ``result.files``."""
     d = Path(directory)
     settings, where = read_settings(d / "in")
     template = read_template(d / "template") if settings.flag("f") else None
@@ -845,27 +927,86 @@ def run_dir(directory, objective: Callable[[np.ndarray], np.ndarray] | None = No
             f"{d / 'in'}: line {where['structure_length']}: Structure Length: "
             f"{settings.structure_length}, but the genes of {d / 'template'} take {template.length} bits"
         )
+    dest = d if out_dir is None else Path(out_dir)
+    try:
+        dest.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise GenesisInputError(f"{dest}: cannot create the output folder: {exc.strerror or exc}") from None
     engine = Genesis(settings, template, objective or sum_of_squares)
     result = engine.run()
-    if settings.flag("c") or settings.flag("C"):
-        write_out(d / "out", result.out_lines)
-    write_min(d / "min", result.saved, template, engine.gray)
+    files = []
+    try:
+        if settings.flag("c") or settings.flag("C"):
+            files.append(dest / "out")
+            write_out(files[-1], result.out_lines)
+        files.append(dest / "min")
+        write_min(files[-1], result.saved, template, engine.gray)
+    except OSError as exc:
+        raise GenesisInputError(f"{files[-1]}: cannot write: {exc.strerror or exc}") from None
+    result.files = files
     return result
+
+
+_USAGE = "usage: python -m plugins.genesis DIR [module:function] [--out-dir OUTDIR]"
+_HELP = f"""{_USAGE}
+
+Run the GENESIS 5.0 clone on DIR/in (settings) and DIR/template (genes, with option f), in the
+original program's file formats, and write the original's out (option c or C) and min files into
+DIR, or into OUTDIR with --out-dir (-o). The objective is the sum of squares of the genes unless
+module:function is given (imported from the current directory or PYTHONPATH; it receives the
+genes as a 1-D numpy array and returns a float). Example: python -m plugins.genesis plugins/genesis_example
+"""
+
+
+def _parse_args(argv: list[str]) -> tuple[list[str], str | None] | None:
+    """``(positionals, out_dir)``, or None when the arguments do not fit the usage."""
+    pos: list[str] = []
+    out_dir = None
+    k = 0
+    while k < len(argv):
+        a = argv[k]
+        if a in ("-o", "--out-dir"):
+            if k + 1 >= len(argv) or out_dir is not None:
+                return None
+            out_dir = argv[k + 1]
+            k += 2
+            continue
+        if a.startswith("--out-dir="):
+            if out_dir is not None:
+                return None
+            out_dir = a.partition("=")[2]
+        elif a.startswith("-") and a != "-":
+            return None
+        else:
+            pos.append(a)
+        k += 1
+    if len(pos) not in (1, 2) or out_dir == "":
+        return None
+    return pos, out_dir
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if len(argv) not in (1, 2) or argv[0] in ("-h", "--help"):
-        print("usage: python -m plugins.genesis DIR [module:function]", file=sys.stderr)
+    if any(a in ("-h", "--help") for a in argv):
+        print(_HELP, end="")
+        return 0
+    parsed = _parse_args(argv)
+    if parsed is None:
+        print(_USAGE, file=sys.stderr)
         return 2
+    (directory, *rest), out_dir = parsed
     try:
-        objective = _load_objective(argv[1]) if len(argv) == 2 else None
-        if not Path(argv[0]).is_dir():
-            raise GenesisInputError(f"{argv[0]}: not a directory")
-        run_dir(argv[0], objective)
+        objective = _load_objective(rest[0]) if rest else None
+        if not Path(directory).is_dir():
+            raise GenesisInputError(f"{directory}: not a directory")
+        res = run_dir(directory, objective, out_dir)
     except UserError as exc:
         print(f"genesis: {exc}", file=sys.stderr)
         return 2
+    print(
+        f"genesis: {res.generations} generations, {res.trials} trials, best {res.best_cost:.6e} "
+        f"(stopped: {res.stop_reason}); wrote {', '.join(str(f) for f in res.files)}"
+    )
     return 0
 
 
@@ -891,7 +1032,7 @@ def minimize(
     random_seed: int | None = None,
     report_interval: int = 100,
 ):
-    """GENESIS 5.0 on a :class:`benchmark.problem.BudgetedProblem` (cost minimised).
+    """GENESIS 5.0 on a :class:`benchmark.core.problem.SearchProblem` (cost minimised).
 
     Total Trials is ``problem.budget``; genes span ``[lower, upper]`` with ``2**bits_per_gene``
     values each (option ``f`` is implied, ``g`` selects Gray code). ``report_interval`` only sets
@@ -901,7 +1042,7 @@ def minimize(
     +inf, i.e. :data:`INF_COST`, and end the run). Returns the best decoded vector found,
     ``nit`` = generations evaluated including generation 0, and a message with the stop reason
     and the RANDU seed used."""
-    from benchmark.problem import OptimizerOutput
+    from benchmark.core.problem import OptimizerOutput
 
     def key(name):
         return f"optimizer.plugin.{name}"
