@@ -1,0 +1,291 @@
+"""Make a data set from a spec, and write it as a folder the project's loader reads.
+
+A *spec* (a plain dict, YAML-able) says everything: ``motor`` (preset name), optional
+``machine`` (T-circuit overrides), ``scenario`` (``kind`` and its parameters), ``sample_rate``
+(Hz), ``oversampling``, ``effects`` (drawn effect specs), ``noise``, ``sensors``
+(``has_speed``, ``has_torque``, ``anti_alias``), ``stop`` (``duration``, ``sample_time``; or
+null), ``meta`` (``nameplate``, ``dc_resistance``: whether to write them) and ``seed``.
+:func:`make_spec` draws one from a few choices; :func:`make_dataset` simulates it;
+:func:`write_dataset` writes ``meta.yaml``, ``startup.csv``, optionally ``stop.csv``, and
+``truth.yaml`` (the truth: referred parameters, T-circuit parameters, effects with their
+sizes, noise, scenario).
+
+Randomness: effect sizes, forms and scenario details come from ``default_rng([seed, 1])``
+(in :func:`make_spec`), the noise from ``default_rng(seed)``; the same spec gives
+bit-identical files.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from synthetic.independent.effects import Build, get_effect, ordered
+from synthetic.independent.integrate import COL, coast, oversampling, simulate
+from synthetic.independent.machine import TMachine
+from synthetic.independent.mechanics import Mechanics
+from synthetic.independent.motors import Motor, get_motor
+from synthetic.independent.plant import Plant
+from synthetic.independent.sensors import Noise, Sensors, sensed_speed, startup_record
+from synthetic.independent.supply import Grid, Pwm, SixStep, stop_drive
+from synthetic.independent.thermal import Thermal
+
+#: An open contactor pole is this many times the locked-rotor impedance (0.03 % current).
+OPEN_POLE_FACTOR = 3000.0
+
+
+@dataclass
+class Dataset:
+    """A made data set: ``meta`` (dict), ``startup`` and ``stop`` (column name -> array; stop
+    may be None), ``truth`` (dict), and the internal trajectory for inspection."""
+
+    meta: dict
+    startup: dict
+    stop: dict | None
+    truth: dict
+    trajectory: object = None
+    plant: Plant | None = None
+
+
+def default_noise(motor: Motor) -> dict:
+    """A moderate bench: 0.4 % and 0.3 % of rated current amplitude white and coloured
+    current noise, 12-bit current ADC over 8x rated, speed quantum 0.05 rad/s."""
+    In = motor.rated_current_peak
+    return {"current_white": 0.004 * In, "current_colored": 0.003 * In, "current_pole": 0.97,
+            "current_quantum": 16 * In / 4096, "voltage_white": 0.3, "voltage_quantum": 0.0,
+            "speed_white": 0.02, "speed_quantum": 0.05}
+
+
+def draw_scenario(kind: str, motor: Motor, duration: float, sample_rate: float,
+                  rng: np.random.Generator | None) -> dict:
+    """Scenario parameters for ``kind``; with ``rng`` the imperfections of a real supply are
+    drawn (grid harmonics, unbalance, pole scatter and bounce, dip; PWM ramp), else ideal."""
+    f = motor.frequency
+    if kind == "six_step":
+        Nc = max(1, int(round(sample_rate / (6 * f))))
+        return {"kind": kind, "Ed": motor.Ed, "Nc": Nc, "cycles": max(1, int(round(duration * sample_rate / (6 * Nc))))}
+    if kind == "pwm":
+        sc = {"kind": kind, "Ed": round(1.35 * motor.voltage, 1), "f": f, "V_rated": motor.voltage, "f_rated": f,
+              "ramp": 0.3 * duration, "boost": 0.03, "duration": duration}
+        if rng is not None:
+            sc.update(ramp=float(rng.uniform(0.2, 0.6) * duration), boost=float(rng.uniform(0.02, 0.05)))
+        return sc
+    if kind != "dol":
+        raise ValueError(f"scenario must be dol, six_step or pwm, got {kind!r}")
+    sc = {"kind": kind, "V": motor.voltage, "f": f, "duration": duration}
+    if rng is not None:
+        stagger = [0.0] + list(rng.uniform(0.0, 1.5e-3, 2))
+        sc.update(h5=float(rng.uniform(0, 0.04)), h7=float(rng.uniform(0, 0.03)),
+                  phase5=float(rng.uniform(0, 2 * np.pi)), phase7=float(rng.uniform(0, 2 * np.pi)),
+                  unbalance=[float(x) for x in rng.normal(0, 0.005, 3)], phase0=float(rng.uniform(0, 2 * np.pi)),
+                  pre_trigger=float(rng.uniform(0, 0.05)), stagger=[float(x) for x in rng.permutation(stagger)],
+                  bounce=[float(x) for x in rng.uniform(0.2e-3, 1.0e-3, 3)], arc_voltage=float(rng.uniform(20, 40)),
+                  dip=float(rng.uniform(0.01, 0.05)), x_over_r=float(rng.uniform(2, 6)))
+    return sc
+
+
+def make_spec(motor: str, scenario: str = "six_step", effects=(), seed: int = 0, duration: float = 1.0,
+              sample_rate: float | None = None, stop: float | None = None, forms: dict | None = None,
+              ideal_supply: bool = False, noise: dict | None = None, oversampling: int = 10,
+              has_speed: bool = True, has_torque: bool = False) -> dict:
+    """A spec with the named effects at random realistic sizes and forms (``forms`` fixes
+    some forms), noise ``noise`` (default :func:`default_noise`), stop record of ``stop`` s."""
+    mo = get_motor(motor)
+    fs = float(sample_rate or mo.sample_rate)
+    rng = np.random.default_rng([seed, 1])
+    forms = forms or {}
+    return {
+        "motor": motor, "scenario": draw_scenario(scenario, mo, duration, fs, None if ideal_supply else rng),
+        "sample_rate": fs, "oversampling": int(oversampling),
+        "effects": [get_effect(n).draw(rng, mo, forms.get(n)) for n in effects],
+        "noise": default_noise(mo) if noise is None else dict(noise),
+        "sensors": {"has_speed": bool(has_speed), "has_torque": bool(has_torque)},
+        "stop": None if not stop else {"duration": float(stop), "sample_time": 1e-3},
+        "meta": {"nameplate": True, "dc_resistance": False}, "seed": int(seed)}
+
+
+def build_scenario(sc: dict):
+    kind = sc["kind"]
+    args = {k: (tuple(v) if isinstance(v, list) else v) for k, v in sc.items() if k != "kind"}
+    return {"six_step": SixStep, "pwm": Pwm, "dol": Grid}[kind](**args)
+
+
+def _plain(x):
+    """numpy scalars/arrays and tuples -> plain YAML-safe Python values."""
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x)
+    if isinstance(x, (np.integer, int)) and not isinstance(x, bool):
+        return int(x)
+    return x
+
+
+def make_dataset(spec: dict) -> Dataset:
+    """Simulate the spec (see module docstring) and return the recorded data set."""
+    motor = get_motor(spec["motor"])
+    if spec.get("machine"):
+        motor = motor.with_machine(replace(motor.machine, **spec["machine"]))
+    Ts = 1.0 / float(spec["sample_rate"])
+    scenario = build_scenario(spec["scenario"])
+    K = scenario.samples() if scenario.kind == "six_step" else scenario.samples(Ts)
+    duration = K * Ts - getattr(scenario, "pre_trigger", 0.0)
+    build = Build(motor, scenario, duration, plant={"machine": motor.machine, "mechanics": Mechanics(),
+                                                     "thermal": Thermal()},
+                  sensors={k: v for k, v in (spec.get("sensors") or {}).items()})
+    realised = []
+    for eff in ordered(list(spec.get("effects") or [])):
+        realised.append({**eff, **_plain(get_effect(eff["name"]).apply(build, eff))})
+    plant, drive, M, inv, grid = _plant_and_drive(build, Ts, K, int(spec.get("oversampling", 10)))
+    h = Ts / M
+    pk = plant.pack()
+    req = build.requests.get("temperature_drift")
+    if req is not None:  # size the heat capacities from this test's own copper energies
+        cold = simulate(replace(plant, thermal=Thermal()), drive)
+        E_s, E_r = (float(np.sum(cold.col(c)[:-1]) * h) for c in ("P_s", "P_r"))
+        sized = Thermal.sized(req["form"] == "two_body", E_s, E_r, req["size"], req["rotor_factor"],
+                              req["time_constant"], motor.machine.theta_ref)
+        plant = replace(plant, thermal=sized)
+        pk = plant.pack()
+    traj = simulate(plant, drive, packed=pk)
+    out = traj.out
+    if scenario.kind == "dol":
+        i_ab = out[:, [COL["i_a"], COL["i_b"]]]
+        di = np.gradient(i_ab, h, axis=0)
+        v_step = out[:-1, [COL["v_a"], COL["v_b"]]] - plant.source_L * di[:-1]
+    else:
+        v_step = drive.v_ideal
+    d_cur = int(round(build.skew["current"] * M))
+    d_vol = int(round(build.skew["voltage"] * M))
+    for eff in realised:
+        if eff["name"] == "channel_delay":
+            eff["achieved_size"] = (d_cur or d_vol) / M
+    sensors = Sensors(**build.sensors, current_delay=d_cur, voltage_delay=d_vol)
+    noise = Noise(**(spec.get("noise") or {}))
+    rng = np.random.default_rng(int(spec["seed"]))
+    rec = startup_record(out, COL, v_step, scenario.kind != "dol", K, M, h, sensors, noise, rng,
+                         measured_voltage=scenario.kind == "dol")
+    stop = None
+    if spec.get("stop") and sensors.has_speed:  # a stop record is a speed record
+        last = scenario.gates(K)[-1] if scenario.kind == "six_step" else np.zeros(3)
+        stop = _free_stop(plant, pk, scenario, traj, K * Ts, Ts, M, spec["stop"], last, inv, grid, sensors, noise,
+                          rng, motor)
+    temps = out[:, [COL["theta_s"], COL["theta_r"]]]
+    for eff in realised:
+        if eff["name"] == "temperature_drift":
+            eff["achieved_size"] = float(temps[K * M, 0] - temps[0, 0])
+            eff["achieved_rotor_rise"] = float(temps[K * M, 1] - temps[0, 1])
+    meta = {"kind": "startup", "pole_pairs": int(motor.machine.p), "sample_time": Ts,
+            **_plain(scenario.meta(Ts))}
+    flags = spec.get("meta") or {}
+    if flags.get("dc_resistance"):
+        meta["stator_dc_resistance"] = float(plant.machine.Rs)
+        meta["winding_temperature"] = float(plant.machine.theta_ref)
+    if flags.get("nameplate", True):
+        meta["nameplate"] = _plain(motor.nameplate())
+    truth = _truth(spec, motor, plant, realised, noise, scenario, M, traj)
+    return Dataset(meta, rec, stop, truth, traj, plant)
+
+
+def _plant_and_drive(build: Build, Ts: float, K: int, oversample: int):
+    """The plant (with the grid's source impedance), its start-up drive, the steps per sample
+    and the inverter and grid parameter arrays."""
+    motor, scenario = build.motor, build.scenario
+    plant = Plant(**build.plant)
+    Z_lr = plant.locked_rotor_impedance(motor.frequency)
+    if scenario.kind == "dol":
+        Rg, Lg = scenario.source_impedance(Z_lr)
+        plant = replace(plant, source_R=Rg, source_L=Lg)
+    M = oversampling(plant, Ts, oversample)
+    inv = plant.inverter.pack(getattr(scenario, "Ed", 0.0))
+    if scenario.kind == "dol":
+        R_open = OPEN_POLE_FACTOR * Z_lr
+        sub = max(1, math.ceil(Ts / M * plant.fastest_rate(R_open) / 2.0))
+        grid = scenario.pack(plant.source_R, R_open, 0.01 * motor.rated_current_peak)
+        return plant, scenario.startup(Ts, M, K, grid, sub), M, inv, grid
+    grid = np.zeros(11)
+    return plant, scenario.startup(Ts, M, K, inv), M, inv, grid
+
+
+def _free_stop(plant, pk, scenario, traj, t_start, Ts, M, stop_spec, last_gates, inv, grid, sensors, noise, rng, motor):
+    """Free stop after supply removal: fine integration while the currents brake the rotor,
+    then mechanics only (cheap). Returns ``{t, speed}`` at ``stop.sample_time``.
+
+    The electrical part is over when the stator current is below 1e-3 of its start-up peak
+    and the air-gap torque, acting for another rotor time constant, would change the speed
+    by less than 1e-3 rad/s."""
+    every = max(1, int(round(float(stop_spec.get("sample_time", 1e-3)) / Ts)))
+    dt = every * Ts
+    n_out = int(round(float(stop_spec["duration"]) / dt)) + 1
+    x, im = traj.x, traj.im
+    i_peak = float(np.max(np.hypot(traj.out[:, 0], traj.out[:, 1]))) or 1.0
+    R_eq, L_eq = plant.cage().low_slip()
+    tau_r = (L_eq + plant.mag_curve().Lm0) / R_eq
+    J = plant.machine.J + plant.mechanics.J_load
+    rows = []
+    first = True
+    while len(rows) < n_out:
+        k = min(10, n_out - len(rows))
+        drv = stop_drive(scenario, Ts, M, k * every, last_gates if first else np.ones(3), inv, grid)
+        tr = simulate(plant, drv, x0=x, t0=t_start + len(rows) * dt, im=im, packed=pk)
+        rows.extend(tr.out[:-1:every * M][:, [COL["w_l"], COL["theta"]]])
+        x, im, first = tr.x, tr.im, False
+        quiet = (np.max(np.abs(tr.out[:, COL["T_e"]])) * tau_r / J < 1e-3
+                 and np.max(np.hypot(tr.out[:, 0], tr.out[:, 1])) < 1e-3 * i_peak)
+        if quiet:
+            break
+    rows = np.array(rows)
+    if len(rows) < n_out:
+        rest = coast(plant, x, t_start + len(rows) * dt, (n_out - len(rows)) * dt, dt)
+        rows = np.vstack([rows, rest[:n_out - len(rows)]])
+    speed = sensed_speed(rows[:, 0], rows[:, 1], sensors, noise, rng)
+    return {"t": np.arange(n_out) * dt, "speed": speed}
+
+
+def _truth(spec, motor, plant, realised, noise, scenario, M, traj) -> dict:
+    m = plant.machine
+    par = m.referred()
+    par["J"] = m.J + plant.mechanics.J_load  # the rigid-body inertia a single-mass model sees
+    cage = plant.cage()
+    R_eq, L_eq = cage.low_slip()
+    low = TMachine(m.Rs, m.Lls, L_eq, plant.mag_curve().Lm0, R_eq, m.p, m.J, m.fv, m.fc, m.theta_ref)
+    par.update({k: v for k, v in low.referred().items() if k in ("Ls", "Le", "Rr")})
+    plant_par = m.as_dict()
+    plant_par.update({"Llr_low_slip": L_eq, "Rr_low_slip": R_eq, "rotor_loops": cage.n,
+                      "source_R": plant.source_R, "source_L": plant.source_L})
+    return _plain({
+        "source": "independent", "seed": int(spec["seed"]), "motor": motor.name, "motor_source": motor.source,
+        "parameters": par, "plant_parameters": plant_par,
+        "effects": [{k: v for k, v in e.items()} for e in realised],
+        "noise": noise.describe(), "scenario": scenario.describe(),
+        "simulation": {"sample_rate": float(spec["sample_rate"]), "internal_steps_per_sample": int(M),
+                       "unconverged_solves": int(traj.unconverged)},
+        "spec": spec,
+    })
+
+
+def _write_csv(path: Path, cols: dict) -> None:
+    names = list(cols)
+    data = np.column_stack([np.asarray(cols[n], float) for n in names])
+    np.savetxt(path, data, fmt="%.17g", delimiter=",", header=",".join(names), comments="")
+
+
+def write_dataset(ds: Dataset, folder) -> Path:
+    """Write ``meta.yaml``, ``startup.csv``, ``stop.csv`` (if any) and ``truth.yaml``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "meta.yaml", "w") as fh:
+        yaml.safe_dump(_plain(ds.meta), fh, sort_keys=False)
+    _write_csv(folder / "startup.csv", ds.startup)
+    if ds.stop is not None:
+        _write_csv(folder / "stop.csv", ds.stop)
+    with open(folder / "truth.yaml", "w") as fh:
+        yaml.safe_dump(_plain(ds.truth), fh, sort_keys=False)
+    return folder
+

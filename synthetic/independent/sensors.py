@@ -1,0 +1,196 @@
+"""From the internal trajectory to the recorded channels: sampling, sensor errors, noise.
+
+Sampling picks internal steps (sample ``k`` is step ``k M``); a channel that lags by ``d``
+internal steps reads step ``k M - d`` (before ``t = 0`` the plant is at rest and unsupplied).
+That is a fractional-sample skew of ``d/M`` samples done on the oversampled signal, not an
+interpolation of the output. Inverter voltages are the switch-state voltages averaged over
+the sample (zero-order hold); grid voltages are the terminal voltages at the sample instant.
+An optional first-order anti-aliasing filter (``anti_alias`` Hz) runs at the internal rate on
+the current, voltage (grid) and speed channels before sampling.
+
+Sensor errors (the effects that live here):
+
+* current probes (``compress``): ``tanh`` ``L tanh(i/L)``; ``knee`` linear to ``L`` then
+  ``L + w tanh((|i| - L)/w)``, ``w = L/2``; ``clip`` hard clipping at the acquisition range
+  ``L`` (applied after the noise, as the ADC does);
+* DC offsets on the current and voltage channels;
+* tachometer ``g w + offset + a w sin(theta + phi)`` (gain, offset, ripple at the rotation
+  frequency of the sensed shaft).
+
+Noise (``Noise``): white plus AR(1)-coloured current noise, ADC quantisation of currents and of
+measured (grid) voltages, white noise and quantisation of speed, tachometer commutator ripple
+``r sin(q theta)``, torque-sensor noise. All drawn from one ``numpy.random.Generator`` in a
+fixed order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+COMPRESS_FORMS = ("none", "tanh", "knee", "clip")
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Measurement noise (all standard deviations of the recorded samples).
+
+    Parameters
+    ----------
+    current_white : white current noise, A.
+    current_colored : stationary std of the AR(1) current noise, A.
+    current_pole : AR(1) coefficient per sample (0..1; larger = lower-frequency noise).
+    current_quantum : current ADC step, A (0 = none).
+    voltage_white : voltage noise, V (measured grid voltages only).
+    voltage_quantum : voltage ADC step, V (measured grid voltages only).
+    speed_white : speed noise, rad/s.
+    speed_quantum : speed quantisation step, rad/s.
+    speed_ripple : tachometer commutator ripple amplitude, rad/s.
+    ripple_order : ripple periods per revolution.
+    torque_white : torque-sensor noise, N m.
+    """
+
+    current_white: float = 0.0
+    current_colored: float = 0.0
+    current_pole: float = 0.95
+    current_quantum: float = 0.0
+    voltage_white: float = 0.0
+    voltage_quantum: float = 0.0
+    speed_white: float = 0.0
+    speed_quantum: float = 0.0
+    speed_ripple: float = 0.0
+    ripple_order: int = 12
+    torque_white: float = 0.0
+
+    def describe(self) -> dict:
+        return {k: (float(v) if k != "ripple_order" else int(v)) for k, v in asdict(self).items()}
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Sensor chain settings (defaults: ideal sensors, speed recorded, no torque sensor).
+
+    Parameters
+    ----------
+    compress : one of :data:`COMPRESS_FORMS`.   compress_level : ``L``, A peak.
+    current_offset : DC offsets of ``i_r, i_s``, A.   voltage_offset : of ``v_r, v_s, v_t``, V.
+    current_delay, voltage_delay : channel lag, internal steps.
+    speed_gain, speed_offset (rad/s), speed_ripple_rel, speed_ripple_phase (rad): tachometer.
+    has_speed, has_torque : which channels exist.   anti_alias : filter cut-off, Hz (0 = none).
+    """
+
+    compress: str = "none"
+    compress_level: float = math.inf
+    current_offset: tuple = (0.0, 0.0)
+    voltage_offset: tuple = (0.0, 0.0, 0.0)
+    current_delay: int = 0
+    voltage_delay: int = 0
+    speed_gain: float = 1.0
+    speed_offset: float = 0.0
+    speed_ripple_rel: float = 0.0
+    speed_ripple_phase: float = 0.0
+    has_speed: bool = True
+    has_torque: bool = False
+    anti_alias: float = 0.0
+
+    def __post_init__(self):
+        if self.compress not in COMPRESS_FORMS:
+            raise ValueError(f"compress must be one of {COMPRESS_FORMS}, got {self.compress!r}")
+
+
+def inverse_clarke(a, b) -> np.ndarray:
+    """Phase values R, S, T (columns) of zero-sequence-free alpha-beta values."""
+    s3 = math.sqrt(3) / 2
+    return np.column_stack([a, -0.5 * a + s3 * b, -0.5 * a - s3 * b])
+
+
+def compress(i: np.ndarray, form: str, level: float) -> np.ndarray:
+    """Probe compression before the noise (``tanh``, ``knee``); ``clip`` is done later."""
+    if form == "tanh":
+        return level * np.tanh(i / level)
+    if form == "knee":
+        w = 0.5 * level
+        a = np.abs(i)
+        return np.where(a <= level, i, np.sign(i) * (level + w * np.tanh((a - level) / w)))
+    return i
+
+
+def _lowpass(x: np.ndarray, fc: float, h: float) -> np.ndarray:
+    if fc <= 0:
+        return x
+    a = math.exp(-2 * math.pi * fc * h)
+    return lfilter([1 - a], [1, -a], x, axis=0, zi=np.zeros((1,) + x.shape[1:]) if x.ndim > 1 else [0.0])[0]
+
+
+def _pick(x: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Rows ``idx`` of ``x``; negative indices read the rest state (row 0)."""
+    return x[np.maximum(idx, 0)]
+
+
+def _quantise(x: np.ndarray, q: float) -> np.ndarray:
+    return np.round(x / q) * q if q > 0 else x
+
+
+def ar1(rng: np.random.Generator, std: float, pole: float, shape) -> np.ndarray:
+    """Stationary AR(1) noise of standard deviation ``std`` along axis 0."""
+    w = rng.standard_normal(shape)
+    w[0] /= math.sqrt(1 - pole**2)
+    return std * math.sqrt(1 - pole**2) * lfilter([1.0], [1.0, -pole], w, axis=0)
+
+
+def sensed_speed(w: np.ndarray, theta: np.ndarray, sensors: Sensors, noise: Noise, rng) -> np.ndarray:
+    """Tachometer reading of the true speed ``w`` (rad/s) at shaft angle ``theta`` (rad)."""
+    y = sensors.speed_gain * w + sensors.speed_offset
+    if sensors.speed_ripple_rel:
+        y = y + sensors.speed_ripple_rel * w * np.sin(theta + sensors.speed_ripple_phase)
+    if noise.speed_ripple:
+        y = y + noise.speed_ripple * np.sin(noise.ripple_order * theta)
+    if noise.speed_white:
+        y = y + rng.normal(0.0, noise.speed_white, len(y))
+    return _quantise(y, noise.speed_quantum)
+
+
+def startup_record(out: np.ndarray, cols: dict, v_step: np.ndarray, zoh: bool, K: int, M: int, h: float,
+                   sensors: Sensors, noise: Noise, rng: np.random.Generator, measured_voltage: bool) -> dict:
+    """The recorded start-up columns (``t, v_r, v_s, v_t, i_r, i_s`` [, ``speed``][, ``torque``]).
+
+    ``out`` is the trajectory (rows per internal step, columns ``cols``), ``v_step`` (n, 2)
+    the alpha-beta voltage per step (switch-state average for inverters, terminal value at
+    the step start for the grid), ``zoh`` whether a sample holds the mean over its steps.
+    """
+    base = np.arange(K) * M
+    cur = _lowpass(out[:, [cols["i_a"], cols["i_b"]]], sensors.anti_alias, h)
+    i_ab = _pick(cur, base - sensors.current_delay)
+    if zoh:
+        vpad = np.vstack([np.zeros((M + sensors.voltage_delay, 2)), v_step])
+        csum = np.vstack([np.zeros((1, 2)), np.cumsum(vpad, axis=0)])
+        start = base - sensors.voltage_delay + M + sensors.voltage_delay
+        v_ab = (csum[start + M] - csum[start]) / M
+    else:
+        v_ab = _pick(_lowpass(v_step, sensors.anti_alias, h), base - sensors.voltage_delay)
+    rec = {"t": np.arange(K) * (M * h)}
+    v3 = inverse_clarke(v_ab[:, 0], v_ab[:, 1]) + np.asarray(sensors.voltage_offset, float)
+    if measured_voltage:
+        if noise.voltage_white:
+            v3 = v3 + rng.normal(0.0, noise.voltage_white, v3.shape)
+        v3 = _quantise(v3, noise.voltage_quantum)
+    i3 = inverse_clarke(i_ab[:, 0], i_ab[:, 1])[:, :2]
+    i3 = compress(i3, sensors.compress, sensors.compress_level) + np.asarray(sensors.current_offset, float)
+    if noise.current_white:
+        i3 = i3 + rng.normal(0.0, noise.current_white, i3.shape)
+    if noise.current_colored:
+        i3 = i3 + ar1(rng, noise.current_colored, noise.current_pole, i3.shape)
+    i3 = _quantise(i3, noise.current_quantum)
+    if sensors.compress == "clip":
+        i3 = np.clip(i3, -sensors.compress_level, sensors.compress_level)
+    rec.update(v_r=v3[:, 0], v_s=v3[:, 1], v_t=v3[:, 2], i_r=i3[:, 0], i_s=i3[:, 1])
+    if sensors.has_speed:
+        w = _pick(_lowpass(out[:, cols["w_l"]], sensors.anti_alias, h), base)
+        rec["speed"] = sensed_speed(w, _pick(out[:, cols["theta"]], base), sensors, noise, rng)
+    if sensors.has_torque:
+        tq = _pick(out[:, cols["T_sh"]], base)
+        rec["torque"] = tq + (rng.normal(0.0, noise.torque_white, K) if noise.torque_white else 0.0)
+    return rec
