@@ -1,0 +1,497 @@
+"""Parameter uncertainty and noise levels that stay honest when the noise is coloured.
+
+After a least-squares identification the textbook covariance ``s^2 (J'J)^-1`` assumes white
+residuals. Bench records are sampled far faster than their noise decorrelates (anti-alias
+filters, probe bandwidth, tachometer ripple) and an imperfect model leaves a smooth misfit,
+so the residuals are strongly autocorrelated and ``s^2 (J'J)^-1`` can be several times too
+small. This module gives
+
+* :func:`hac_covariance`: the sandwich ``(J'J)^-1 S (J'J)^-1`` with ``S`` the long-run
+  covariance of the score terms ``g_t = J_t r_t`` (Newey-West / Bartlett weights, bandwidth
+  by the Andrews (1991) AR(1) plug-in), per channel;
+* :func:`standard_errors`, :func:`correlation`, :func:`uncertainty_warnings`;
+* noise estimates for one channel with their own relative uncertainty
+  (:func:`noise_from_quiet`, :func:`noise_from_periodic`, :func:`noise_from_smooth`,
+  dispatcher :func:`noise_std`), and :func:`misfit_ratio`, which says whether an RMS
+  residual is at the noise level.
+
+Pure numerics: numpy and scipy only.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+RHO_MAX = 0.97  #: AR(1) coefficients are clipped to +-RHO_MAX in plug-in formulas
+
+
+@dataclass(frozen=True, eq=False)  # holds arrays: compare fields explicitly
+class HACInfo:
+    """Diagnostics of :func:`hac_covariance`.
+
+    bandwidth : Bartlett bandwidth ``S_T`` (samples); n_lags : lags with non-zero weight.
+    rank, k : numerical rank of the column-scaled Jacobian, and its number of columns.
+    rho : AR(1) coefficient of each (prewhitened) score component, clipped to +-0.97.
+    cross_channel : channels treated as time-aligned (cross-channel covariances included).
+    null_space : (k, k - rank) basis of the non-identifiable directions (column-scaled).
+    """
+
+    bandwidth: float
+    n_lags: int
+    rank: int
+    k: int
+    rho: tuple
+    cross_channel: bool
+    null_space: np.ndarray
+
+
+def _segments(groups, n: int) -> list[tuple[int, int]]:
+    """Contiguous (start, stop) segments of the label array ``groups`` (one per channel)."""
+    if groups is None:
+        return [(0, n)]
+    g = np.asarray(groups)
+    if g.shape != (n,):
+        raise ValueError(f"groups has shape {g.shape}, expected ({n},)")
+    cuts = np.flatnonzero(g[1:] != g[:-1]) + 1
+    bounds = np.concatenate([[0], cuts, [n]])
+    labels = g[bounds[:-1]]
+    if len(set(labels.tolist())) != len(labels):
+        raise ValueError("groups must label contiguous channel segments (a label occurs in two blocks)")
+    return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _ar1(x: np.ndarray) -> float:
+    """Lag-1 autocorrelation of a (centred) series, 0 for degenerate input."""
+    den = float(np.dot(x, x))
+    return float(np.dot(x[1:], x[:-1]) / den) if den > 0 and len(x) > 2 else 0.0
+
+
+def _andrews_bandwidth(series: list[np.ndarray]) -> tuple[float, np.ndarray]:
+    """Andrews (1991) AR(1) plug-in bandwidth of the Bartlett kernel, pooled over segments.
+
+    Each score component ``a`` gets ``rho_a`` and innovation variance ``s_a^2`` by least
+    squares on lag pairs inside segments; ``alpha = sum 4 rho^2 s^4 / ((1-rho)^6 (1+rho)^2)
+    / sum s^4 / (1-rho)^4`` and ``S_T = 1.1447 (alpha T)^(1/3)``, T the median segment
+    length. ``rho`` is clipped to +-0.97; ``S_T`` to [1, T/4].
+    """
+    num = sum(np.einsum("ij,ij->j", s[1:], s[:-1]) for s in series)
+    den = sum(np.einsum("ij,ij->j", s[:-1], s[:-1]) for s in series)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rho = np.where(den > 0, num / den, 0.0)
+    rho = np.clip(rho, -RHO_MAX, RHO_MAX)
+    s2 = sum(((s[1:] - rho * s[:-1]) ** 2).sum(axis=0) for s in series) / max(
+        sum(len(s) - 1 for s in series), 1)
+    a_num = np.sum(4 * rho**2 * s2**2 / ((1 - rho) ** 6 * (1 + rho) ** 2))
+    a_den = np.sum(s2**2 / (1 - rho) ** 4)
+    T = float(np.median([len(s) for s in series]))
+    alpha = a_num / a_den if a_den > 0 else 0.0
+    st = 1.1447 * (alpha * T) ** (1.0 / 3.0)
+    return float(np.clip(st, 1.0, max(1.0, T / 4))), rho
+
+
+def _prewhiten(series: list[np.ndarray], k: int) -> tuple[list[np.ndarray], np.ndarray]:
+    """Andrews-Monahan (1992) VAR(1) prewhitening: ``u_t = g_t - A g_{t-1}`` (A by least squares
+    on lag pairs inside segments, its singular values capped at 0.97); the long-run covariance
+    of ``g`` is ``(I - A)^-1 S_u (I - A)^-T``. Returns the ``u`` series and ``(I - A)^-1``."""
+    xx = sum(s[:-1].T @ s[:-1] for s in series if len(s) > 1)
+    xy = sum(s[:-1].T @ s[1:] for s in series if len(s) > 1)
+    A = (np.linalg.pinv(xx) @ xy).T
+    U, d, Vt = np.linalg.svd(A)
+    A = (U * np.minimum(d, RHO_MAX)) @ Vt
+    return [s[1:] - s[:-1] @ A.T for s in series if len(s) > 1], np.linalg.inv(np.eye(k) - A)
+
+
+def hac_covariance(jac, residuals, groups=None, bandwidth=None, *, aligned=None, prewhiten=True,
+                   dof_correction=True, rcond=1e-7, return_info=False):
+    """Heteroscedasticity- and autocorrelation-consistent covariance of least-squares parameters.
+
+    Sandwich ``(J'J)^-1 S (J'J)^-1``, ``S = G_0 + sum_{l>=1} w_l (G_l + G_l')`` with
+    ``G_l = sum_t g_t g_{t-l}'`` over the score terms ``g_t = J_t r_t`` and Bartlett
+    (Newey-West) weights ``w_l = 1 - l / S_T`` for ``l < S_T``. Lags never cross a channel
+    boundary. When the channels are time-aligned (``aligned``; default: all segments have the
+    same length) the scores of all channels at one instant are summed first, so ``S`` also
+    holds the cross-channel covariances at every lag; otherwise each channel's long-run
+    covariance is added (cross-channel terms neglected).
+
+    Parameters
+    ----------
+    jac : (n, k) Jacobian of the (already noise-scaled) residuals at the optimum.
+    residuals : (n,) stacked residual vector (same units as ``jac`` rows).
+    groups : (n,) int labels of contiguous channel segments, or None for one channel.
+    bandwidth : Bartlett bandwidth ``S_T`` in samples; None = Andrews (1991) AR(1) plug-in
+        (scores of the unit-norm-scaled Jacobian, equal weights), with ``|rho| <= 0.97`` and
+        ``1 <= S_T <= T/4`` (T: samples per channel). Near a unit root (``rho`` clipped) the
+        kernel estimate is biased low whatever the bandwidth.
+    aligned : treat equal-length segments as simultaneous samples of one time axis.
+    prewhiten : Andrews-Monahan (1992) VAR(1) prewhitening of the scores before the kernel
+        estimate, recoloured after (as R's ``sandwich::NeweyWest`` default). Much less biased
+        for strongly autocorrelated scores (see Notes).
+    dof_correction : multiply by ``n / (n - k)``.
+    rcond : singular values of the column-scaled Jacobian below ``rcond * s_max`` count as
+        zero. A rank-deficient Jacobian gives a :class:`RuntimeWarning` and the pseudo-inverse
+        (minimum-norm) covariance: the standard errors along the null directions are NOT
+        finite, the correlation of the parameters involved is +-1.
+    return_info : also return a :class:`HACInfo`.
+
+    Returns
+    -------
+    cov : (k, k) covariance in the units of the parameters (or ``(cov, info)``).
+
+    Notes
+    -----
+    Bartlett weights under-estimate ``S`` by about ``sum |l| gamma_l / (S_T sum gamma_l)``.
+    Measured 95 % coverage (regression on constant, slow sine and trend, AR(1) noise, 400
+    draws): phi = 0.9, n = 2000: 88-90 % without prewhitening, 92-94 % with it (white
+    ``s^2 (J'J)^-1``: 32 %); n = 500: 80-83 % / 90-92 %; phi = 0.5: 91-94 % / 93-95 %; white
+    noise: 93-95 % for all three. A score autocorrelation beyond 0.97 per sample (a smooth model
+    misfit sampled fast) is capped: the standard errors are then lower bounds (see
+    ``HACInfo.rho``).
+    """
+    J = np.asarray(jac, dtype=float)
+    r = np.asarray(residuals, dtype=float).ravel()
+    n, k = J.shape
+    if r.shape != (n,):
+        raise ValueError(f"residuals has {r.size} entries, jac has {n} rows")
+    scale = np.linalg.norm(J, axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    _, sv, Vt = np.linalg.svd(J / scale, full_matrices=False)
+    keep = sv > rcond * (sv[0] if len(sv) and sv[0] > 0 else 1.0)
+    rank = int(keep.sum())
+    inv_sv2 = np.where(keep, 1.0 / np.where(keep, sv, 1.0) ** 2, 0.0)
+    bread = (Vt.T * inv_sv2) @ Vt
+    null = Vt[~keep].T
+    if rank < k:
+        involved = np.flatnonzero(np.abs(null).max(axis=1) > 1e-3)
+        warnings.warn(f"Jacobian has rank {rank} of {k}: parameters {involved.tolist()} (0-based) are not "
+                      "separately identifiable; their covariance is the pseudo-inverse one (standard errors "
+                      "along the null direction are not finite)", RuntimeWarning, stacklevel=2)
+    score = J / scale * r[:, None]
+    segs = _segments(groups, n)
+    lengths = {b - a for a, b in segs}
+    cross = (len(lengths) == 1) if aligned is None else bool(aligned)
+    if cross and len(lengths) != 1:
+        raise ValueError("aligned=True needs channel segments of equal length")
+    series = [sum(score[a:b] for a, b in segs)] if cross else [score[a:b] for a, b in segs]
+    recolour = np.eye(k)
+    if prewhiten:
+        series, recolour = _prewhiten(series, k)
+    st, rho = _andrews_bandwidth(series)
+    if bandwidth is not None:
+        st = max(float(bandwidth), 1.0)
+    n_lags = int(math.ceil(st) - 1)
+    S = sum(s.T @ s for s in series)
+    for lag in range(1, n_lags + 1):
+        w = 1.0 - lag / st
+        G = sum(s[lag:].T @ s[:-lag] for s in series if len(s) > lag)
+        if not isinstance(G, int):
+            S = S + w * (G + G.T)
+    S = recolour @ S @ recolour.T
+    cov_s = bread @ S @ bread
+    if dof_correction and n > k:
+        cov_s *= n / (n - k)
+    cov = cov_s / np.outer(scale, scale)
+    if not return_info:
+        return cov
+    return cov, HACInfo(st, n_lags, rank, k, tuple(float(x) for x in rho), cross, null)
+
+
+def white_covariance(jac, residuals) -> np.ndarray:
+    """Textbook ``s^2 (J'J)^+`` with ``s^2 = r'r / (n - k)``: valid for white residuals only."""
+    J = np.asarray(jac, dtype=float)
+    r = np.asarray(residuals, dtype=float).ravel()
+    n, k = J.shape
+    return float(r @ r) / max(n - k, 1) * np.linalg.pinv(J.T @ J)
+
+
+def standard_errors(cov) -> np.ndarray:
+    """Square roots of the diagonal; nan where the variance is negative or not finite."""
+    d = np.diag(np.asarray(cov, dtype=float)).copy()
+    ok = np.isfinite(d) & (d >= 0)
+    return np.where(ok, np.sqrt(np.where(ok, d, 0.0)), np.nan)
+
+
+def correlation(cov) -> np.ndarray:
+    """Correlation matrix, clipped to [-1, 1]; nan rows/columns where a standard error is 0 or
+    not finite (the diagonal is 1 where it is defined)."""
+    c = np.asarray(cov, dtype=float)
+    se = standard_errors(c)
+    ok = np.isfinite(se) & (se > 0)
+    d = np.where(ok, se, np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        R = np.clip(c / np.outer(d, d), -1.0, 1.0)
+    R[np.diag_indices_from(R)] = np.where(ok, 1.0, np.nan)
+    return R
+
+
+@dataclass(frozen=True)
+class NoiseEstimate:
+    """Noise level of one channel.
+
+    std : estimated noise standard deviation (units of the channel).
+    rel_uncertainty : one-sigma relative uncertainty of ``std`` (Gaussian noise assumed:
+        ``1 / sqrt(2 n_effective)``).
+    n_effective : effective number of independent samples for a variance estimate.
+    method : how it was obtained (plain English).
+    """
+
+    std: float
+    rel_uncertainty: float
+    n_effective: float
+    method: str
+
+
+def _phi(e: np.ndarray) -> float:
+    """AR(1) coefficient of a mean-removed residual, with Kendall's bias correction
+    ``+(1 + 3 phi) / N``, clipped to +-0.97."""
+    p = _ar1(e)
+    return float(np.clip(p + (1 + 3 * p) / len(e), -RHO_MAX, RHO_MAX))
+
+
+def _ar1_gain(phi: float, omega) -> np.ndarray:
+    """AR(1) spectrum relative to white noise of the same variance, at ``omega`` rad/sample."""
+    return (1 - phi**2) / (1 - 2 * phi * np.cos(omega) + phi**2)
+
+
+def _estimate(e: np.ndarray, p_eff: float, phi: float, method: str) -> NoiseEstimate:
+    """Variance ``e'e / (N - p_eff)`` and ``N_eff = (N - p_eff)(1 - phi^2)/(1 + phi^2)``
+    (Bartlett's formula for the variance of a sample variance of AR(1) noise)."""
+    dof = max(len(e) - p_eff, 1.0)
+    n_eff = dof * (1 - phi**2) / (1 + phi**2)
+    std = math.sqrt(float(e @ e) / dof)
+    return NoiseEstimate(std, 1.0 / math.sqrt(2 * n_eff), n_eff, method)
+
+
+def noise_from_quiet(x, *, detrend: bool = False) -> NoiseEstimate:
+    """Noise of a segment that holds no signal (a pre-trigger): std about the mean.
+
+    The mean removes ``g(0) = (1 + phi)/(1 - phi)`` degrees of freedom, not 1, for AR(1) noise
+    (phi from the lag-1 autocorrelation); the variance is divided by ``N - g(0)``
+    (``N - 2 g(0)`` with ``detrend``) so it is unbiased for AR(1) noise.
+    """
+    x = np.asarray(x, dtype=float).ravel()
+    if len(x) < 8:
+        raise ValueError(f"a quiet segment of {len(x)} samples is too short (>= 8 needed)")
+    cols = [np.ones(len(x))] + ([np.linspace(-1, 1, len(x))] if detrend else [])
+    A = np.column_stack(cols)
+    e = x - A @ np.linalg.lstsq(A, x, rcond=None)[0]
+    phi = _phi(e)
+    p_eff = min(len(cols) * (1 + phi) / (1 - phi), len(x) / 2)
+    return _estimate(e, p_eff, phi, "quiet segment" + (" (detrended)" if detrend else ""))
+
+
+def _harmonic_design(n: int, fs: float, f: float, n_harmonics: int, trend: bool):
+    t = np.arange(n) / fs
+    cols, omegas = [np.ones(n)], [0.0]
+    if trend:
+        cols.append(np.linspace(-1, 1, n))
+        omegas.append(0.0)
+    for h in range(1, n_harmonics + 1):
+        if h * f >= 0.499 * fs:
+            break
+        w = 2 * np.pi * h * f
+        cols += [np.cos(w * t), np.sin(w * t)]
+        omegas += [w / fs, w / fs]
+    return np.column_stack(cols), np.asarray(omegas)
+
+
+def _solve(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Least squares by normal equations summed in plain numpy (no multi-threaded BLAS: these
+    designs are small and well conditioned); falls back to ``lstsq`` when ill-conditioned."""
+    G = np.einsum("ij,ik->jk", A, A)
+    if np.linalg.cond(G) > 1e10:
+        return np.linalg.lstsq(A, x, rcond=None)[0]
+    return np.linalg.solve(G, np.einsum("ij,i->j", A, x))
+
+
+def _harmonic_residual(x, fs, f, n_harmonics, trend):
+    A, om = _harmonic_design(len(x), fs, f, n_harmonics, trend)
+    return x - A @ _solve(A, x), om
+
+
+def refine_frequency(x, fs: float, f0: float, n_harmonics: int = 10, f0_range: float = 0.005,
+                     trend: bool = True) -> float:
+    """Least-squares fundamental (Hz) of a constant (+ trend) + harmonics ``1..n_harmonics``
+    fit, searched within ``f0 (1 +- f0_range)``: a grid of ``f0 / (4 n_harmonics n_periods)``
+    steps (finer than the narrowest line's main lobe), then three Gauss-Newton steps on the
+    frequency (variable projection)."""
+    x = np.asarray(x, dtype=float).ravel()
+    n = len(x)
+    t = np.arange(n) / fs
+    step = f0 / (4 * max(n_harmonics, 1) * n * f0 / fs)
+    grid = np.arange(f0 * (1 - f0_range), f0 * (1 + f0_range) + step, step)
+    f = float(grid[int(np.argmin([np.sum(_harmonic_residual(x, fs, g, n_harmonics, trend)[0] ** 2)
+                                  for g in grid]))])
+    for _ in range(3):
+        A, om = _harmonic_design(n, fs, f, n_harmonics, trend)
+        c = _solve(A, x)
+        m = 1 + trend
+        h = (np.arange(len(om) - m) // 2 + 1)[::2]
+        a, b = c[m::2], c[m + 1::2]
+        jf = 2 * np.pi * t * (A[:, m + 1::2] @ (-a * h) + A[:, m::2] @ (b * h))
+        df = float(_solve(np.column_stack([A, jf]), x)[-1])
+        f += float(np.clip(df, -step, step))
+        if abs(df) < 1e-9 * f:
+            break
+    return f
+
+
+def noise_from_periodic(x, fs: float, f0: float, n_harmonics: int = 10, *, trend: bool = True,
+                        refine_f0: bool = True, f0_range: float = 0.005) -> NoiseEstimate:
+    """Noise of a steady-state periodic segment (a supply voltage, a steady current).
+
+    Least-squares fit of a constant (+ a linear trend) + harmonics ``1..n_harmonics`` of
+    ``f0`` over the largest whole number of periods; the noise is the std of what is left:
+    lines go, coloured noise stays (except the little of it the fit absorbs, removed below).
+
+    Parameters
+    ----------
+    x : samples of the channel; fs : sample rate in Hz; f0 : fundamental in Hz.
+    n_harmonics : highest harmonic fitted (those at or above Nyquist are skipped).
+    trend : fit a linear drift too.
+    refine_f0 : refine f0 within ``+-f0_range`` (relative) by minimising the residual: a
+        0.1 % error in f0 leaves a beat of the fundamental far above the noise.
+
+    Notes
+    -----
+    Each fitted column at ``omega`` absorbs ``g(omega)`` noise degrees of freedom, ``g`` the
+    AR(1) spectrum of the residual relative to white; the variance is divided by
+    ``N - sum g``. ``N_eff = (N - sum g)(1 - phi^2)/(1 + phi^2)``. Non-periodic signal left
+    in the segment (a drifting amplitude, interharmonics) counts as noise.
+    """
+    x = np.asarray(x, dtype=float).ravel()
+    if len(x) * f0 / fs < 1:
+        raise ValueError(f"segment of {len(x) / fs:.4g} s is shorter than one period of {f0} Hz")
+    f = float(f0)
+    if refine_f0:
+        f = refine_frequency(x, fs, f0, n_harmonics, f0_range)
+    n = int(round(math.floor(len(x) * f / fs) * fs / f))
+    e, om = _harmonic_residual(x[:min(n, len(x))], fs, f, n_harmonics, trend)
+    phi = _phi(e)
+    p_eff = min(float(np.sum(_ar1_gain(phi, om))) + (1 if refine_f0 else 0), len(e) / 2)
+    return _estimate(e, p_eff, phi, f"periodic fit ({f:.4f} Hz, {(len(om) - 1 - trend) // 2} harmonics)")
+
+
+def noise_from_smooth(x, window: int, polyorder: int = 2) -> NoiseEstimate:
+    """Noise of a slowly varying channel (a speed): residual from a Savitzky-Golay fit.
+
+    The residual ``e = (I - H) x`` of white noise has variance ``sigma^2 (1 - h_0)``, ``h_0``
+    the centre tap of the filter (its own gain); it is divided out. Only interior samples
+    (half a window from each end) are used. ``N_eff = N / (1 + 2 sum_l r_l^2)`` from the
+    residual's sample autocorrelation over one window.
+
+    Bias for coloured noise: the filter passes as "signal" every noise component below its
+    cut-off (about ``(polyorder + 1) / (2 window)`` cycles per sample), so the estimate is the
+    high-frequency part of the noise scaled as if the noise were white. For low-pass (AR(1),
+    phi > 0) noise it is biased low; measured (order 2, 3000 samples): phi = 0.5: -13 % in std
+    with a 21-sample window, -5 % with 51; phi = 0.9: -56 % and -37 %. So: make ``window`` as
+    long as the signal's curvature allows (the signal must be a quadratic over one window,
+    else it leaks in and biases high); fine for quantisation and ripple-type noise; prefer
+    :func:`noise_from_quiet` when a rest segment exists. ``rel_uncertainty`` covers the
+    random error only (measured: 10 % conservative for white noise), not this bias.
+    """
+    x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
+    if window <= polyorder + 1 or len(x) < 3 * window:
+        raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
+    half = window // 2
+    h0 = float(signal.savgol_coeffs(window, polyorder)[half])
+    e = (x - signal.savgol_filter(x, window, polyorder, mode="interp"))[half:len(x) - half]
+    r = np.array([np.dot(e[lag:], e[:-lag]) for lag in range(1, window + 1)]) / float(e @ e)
+    n_eff = len(e) / (1 + 2 * float(np.sum(r**2)))
+    std = math.sqrt(float(e @ e) / (len(e) * (1.0 - h0)))
+    return NoiseEstimate(std, 1.0 / math.sqrt(2 * n_eff), n_eff,
+                         f"smooth (Savitzky-Golay window {window}, order {polyorder})")
+
+
+def noise_std(x, fs=None, *, f0=None, n_harmonics: int = 10, window=None, polyorder: int = 2) -> NoiseEstimate:
+    """Dispatcher: :func:`noise_from_periodic` when ``f0`` (and ``fs``, Hz) are given,
+    :func:`noise_from_smooth` when ``window`` (samples) is, else :func:`noise_from_quiet`."""
+    if f0 is not None:
+        if fs is None:
+            raise ValueError("noise_std: f0 needs fs (sample rate in Hz)")
+        return noise_from_periodic(x, fs, f0, n_harmonics)
+    if window is not None:
+        return noise_from_smooth(x, window, polyorder)
+    return noise_from_quiet(x)
+
+
+@dataclass(frozen=True)
+class FitQuality:
+    """RMS residual over the noise std.
+
+    ratio : RMS(residual) / noise.std (1 = the model leaves only noise).
+    threshold : upper end of the band "at the noise level".
+    at_noise_level : ``lower <= ratio <= threshold``.
+    lower : lower end of the band; below it the noise is over-estimated or the model fits noise.
+    """
+
+    ratio: float
+    threshold: float
+    at_noise_level: bool
+    lower: float
+
+
+def misfit_ratio(residual, noise: NoiseEstimate, *, k: float = 2.0, bias_floor: float = 0.05) -> FitQuality:
+    """Is an RMS residual at the noise level?
+
+    The band is ``1 +- (k * u + bias_floor)``, ``u = sqrt(u_noise^2 + u_res^2)`` the relative
+    one-sigma uncertainty of the ratio: ``u_noise = noise.rel_uncertainty`` and
+    ``u_res = 1 / sqrt(2 N_eff)`` of the residual's RMS (its AR(1) coefficient). ``k = 2``
+    (about 95 %); ``bias_floor = 0.05`` covers estimator biases the sigma does not (a 5 %
+    error in std: a few per cent from non-Gaussian noise or a non-AR(1) spectrum, the
+    Bartlett under-estimate, signal leaking into the noise estimate).
+    """
+    r = np.asarray(residual, dtype=float).ravel()
+    rms = math.sqrt(float(np.mean(r**2)))
+    phi = _phi(r - r.mean()) if len(r) > 2 else 0.0
+    u_res = 1.0 / math.sqrt(2 * len(r) * (1 - phi**2) / (1 + phi**2))
+    u = math.hypot(noise.rel_uncertainty, u_res)
+    ratio = rms / noise.std if noise.std > 0 else math.inf
+    hi, lo = 1 + k * u + bias_floor, max(0.0, 1 - k * u - bias_floor)
+    return FitQuality(ratio, hi, bool(lo <= ratio <= hi), lo)
+
+
+def uncertainty_warnings(names, values, se, corr, lower, upper, *, rel_se_max: float = 0.5,
+                         corr_max: float = 0.995, bound_tol: float = 1e-3, units=None,
+                         bounds_key: str = "problem.bounds") -> list[str]:
+    """Plain-English warnings about identified parameters.
+
+    * at a bound: ``|value - bound| <= bound_tol * (upper - lower)`` (``bound_tol * max(|bound|, 1)``
+      when the other bound is infinite);
+    * not identifiable: ``se > rel_se_max * |value|`` or a non-finite se;
+    * not separately identifiable: ``|corr| > corr_max`` for a pair (both named).
+
+    ``units`` : optional mapping name -> unit string (``"ohm"``), used in the messages.
+    """
+    names = list(names)
+    v, s = np.asarray(values, float), np.asarray(se, float)
+    lo, hi = np.broadcast_to(np.asarray(lower, float), v.shape), np.broadcast_to(np.asarray(upper, float), v.shape)
+    R = np.asarray(corr, float)
+    units = units or {}
+    out = []
+    for j, name in enumerate(names):
+        u = f" {units[name]}" if name in units else ""
+        width = hi[j] - lo[j]
+        for side, b in (("lower", lo[j]), ("upper", hi[j])):
+            if not np.isfinite(b):
+                continue
+            tol = bound_tol * (width if np.isfinite(width) and width > 0 else max(abs(b), 1.0))
+            if abs(v[j] - b) <= tol:
+                out.append(f"{name} = {v[j]:.4g}{u} sits at its {side} bound {b:.4g}: widen {bounds_key}.{name}")
+        if not np.isfinite(s[j]):
+            out.append(f"{name} is not identifiable from these data: its standard error is not finite")
+        elif s[j] > rel_se_max * abs(v[j]):
+            rel = f"{100 * s[j] / abs(v[j]):.0f} % of its value" if v[j] != 0 else "larger than its value 0"
+            out.append(f"{name} is not identifiable from these data: standard error {s[j]:.3g}{u} is {rel}"
+                       f" {v[j]:.4g}{u} (limit {100 * rel_se_max:.0f} %)")
+    for a in range(len(names)):
+        for b in range(a + 1, len(names)):
+            c = R[a, b]
+            if np.isfinite(c) and abs(c) > corr_max:
+                out.append(f"{names[a]} and {names[b]} are not separately identifiable: correlation {c:+.4f}"
+                           f" (|corr| > {corr_max}); the data fix only a combination of the two")
+    return out

@@ -1,0 +1,166 @@
+"""benchmark.problems.timedomain.record_conditioning on a synthetic bench record of a motor start."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from benchmark.problems.timedomain.record_conditioning import (
+    check_speed_gain,
+    condition_record,
+    detect_clipping,
+    detect_switch_on,
+    estimate_frequency,
+    estimate_offsets,
+)
+
+TS, F0, P, N = 1e-4, 50.0, 2, 10_000
+K_ON = 1034  # first contact; the contacts bounce open twice in the next millisecond
+V_OFF = (2.31, -1.70, 0.90)
+I_OFF = (0.12, -0.21)
+SPEED_OFF = 1.5
+SYNC = 2 * np.pi * F0 / P
+
+
+def record(seed=0, clip=None, gain=1.0, saturate=None):
+    """(v (3,n), i (2,n) measured, i (2,n) before clipping, speed (n,)) of a 1 s start record."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(N) * TS
+    ton = K_ON * TS
+    on = t >= ton
+    closed = on.copy()
+    closed[K_ON + 3:K_ON + 6] = False
+    closed[K_ON + 8:K_ON + 10] = False
+    decay = np.where(on, np.exp(-(t - ton) / 0.08), 0.0)
+    dip = 1 - 0.02 * decay  # 2 % supply dip while the start current flows
+    v, i = np.empty((3, N)), np.empty((2, N))
+    for k in range(3):
+        th = 2 * np.pi * F0 * t - 2 * np.pi * k / 3
+        v[k] = 325 * dip * (np.sin(th) + 0.03 * np.sin(5 * th)) * closed + V_OFF[k] + 0.5 * rng.standard_normal(N)
+        if k < 2:
+            th_on = 2 * np.pi * F0 * ton - 2 * np.pi * k / 3
+            env = 5 + 95 * decay
+            cur = on * (env * np.sin(th - 1.2) - 100 * np.sin(th_on - 1.2) * np.exp(-(t - ton) / 0.03) * on)
+            if saturate is not None:
+                cur = saturate * np.tanh(cur / saturate)
+            i[k] = cur + I_OFF[k] + 0.02 * rng.standard_normal(N)
+    raw = i.copy()
+    if clip is not None:
+        i = np.clip(i, -clip, clip)
+    w = 0.995 * SYNC * (1 - np.exp(-(t - ton) / 0.12)) * on
+    ripple = 0.005 * w * np.sin(2 * np.pi * 25 * t)  # tachometer ripple at the rotation frequency
+    speed = gain * (w + ripple) + SPEED_OFF + 0.2 * rng.standard_normal(N)
+    return v, i, raw, speed
+
+
+def test_switch_on_within_bounce_window():
+    v, *_ = record()
+    k = detect_switch_on(v, TS)
+    print("switch-on found at", k, "true", K_ON)
+    assert k is not None and abs(k - K_ON) <= 2
+    assert detect_switch_on(v[:, K_ON + 500:], TS) is None  # starts energised
+    stop = v.copy()
+    stop[:, 7000:] = np.array(V_OFF)[:, None]  # supply switched off again at 0.7 s
+    assert abs(detect_switch_on(stop, TS) - K_ON) <= 2
+    assert detect_switch_on(np.zeros((3, 2000)), TS) is None
+    spiky = v.copy()
+    spiky[:, 300] = 400.0  # an isolated spike in the pre-trigger is not a switch-on
+    assert abs(detect_switch_on(spiky, TS) - K_ON) <= 2
+
+
+def test_offsets_with_pretrigger():
+    v, i, _, _ = record(seed=1)
+    errs = []
+    for x, off, tol in [*zip(v, V_OFF, [0.05] * 3, strict=True), *zip(i, I_OFF, [0.01] * 2, strict=True)]:
+        est, how = estimate_offsets(x, TS, K_ON, F0)
+        errs.append(est - off)
+        assert abs(est - off) < tol and how.startswith("pre-trigger")
+    print("pre-trigger offset errors", np.round(errs, 4))
+
+
+def test_offsets_without_pretrigger_and_frequency():
+    v, i, _, _ = record(seed=2)
+    v, i = v[:, K_ON + 2000:], i[:, K_ON + 2000:]  # record starts 0.2 s after switch-on
+    f = estimate_frequency(v[0], TS)
+    assert abs(f - F0) < 0.01
+    errs = []
+    for x, off, tol in [*zip(v, V_OFF, [0.05] * 3, strict=True), *zip(i, I_OFF, [0.01] * 2, strict=True)]:
+        est, how = estimate_offsets(x, TS, None, None, f0_from=v[0])
+        errs.append(est - off)
+        assert abs(est - off) < tol and how.startswith("steady-tail"), (est, off, how)
+    print("f0 error", f - F0, "steady-tail offset errors", np.round(errs, 4))
+
+
+def test_hard_clipping_found_exactly():
+    _, i, raw, _ = record(seed=3, clip=60.0)
+    for x, r in zip(i, raw, strict=True):
+        expect = np.abs(r) >= 60.0
+        mask = detect_clipping(x)
+        print("clipped", expect.sum(), "found", mask.sum())
+        assert expect.sum() > 20
+        assert np.array_equal(mask, expect)
+    _, i, _, _ = record(seed=3)
+    for x in i:  # nothing clipped, nothing saturated: nothing flagged
+        assert not detect_clipping(x).any()
+        assert not detect_clipping(x, ts=TS, f0=F0).any()
+
+
+def test_soft_saturation_flagged_in_start_current_only():
+    _, i, _, _ = record(seed=4, saturate=80.0)
+    for x in i:
+        mask = detect_clipping(x, ts=TS, f0=F0, start=K_ON)
+        flagged = np.flatnonzero(mask)
+        print("soft-saturation samples flagged", len(flagged), "first/last", flagged[:1], flagged[-1:])
+        assert len(flagged) > 0
+        assert flagged.min() >= K_ON and flagged.max() * TS < 0.5  # the high-current part only
+        assert detect_clipping(x).sum() == 0  # no hard clip
+
+
+@pytest.mark.parametrize("tau,tau_dc,h5", [(0.02, 0.005, 0.02), (0.3, 0.1, 0.02), (0.05, 0.01, 0.0)])
+def test_soft_check_no_false_alarm(tau, tau_dc, h5):
+    # fast envelope and DC decays and a 2 % 5th harmonic: sine-like but not a sine per period
+    rng = np.random.default_rng(8)
+    t = np.arange(N) * TS
+    ton = K_ON * TS
+    on = t >= ton
+    for k in range(2):
+        th, th_on = 2 * np.pi * F0 * t - 2 * np.pi * k / 3, 2 * np.pi * F0 * ton - 2 * np.pi * k / 3
+        env = 5 + 95 * np.where(on, np.exp(-(t - ton) / tau), 0.0)
+        cur = on * (env * (np.sin(th - 1.2) + h5 * np.sin(5 * (th - 1.2)))
+                    - 100 * np.sin(th_on - 1.2) * np.exp(-(t - ton) / tau_dc))
+        x = cur + 0.1 * rng.standard_normal(N)
+        assert not detect_clipping(x, ts=TS, f0=F0, start=K_ON).any()
+
+
+@pytest.mark.parametrize("gain,flagged", [(1.0, False), (1.03, True)])
+def test_speed_gain(gain, flagged):
+    *_, speed = record(seed=5, gain=gain)
+    chk = check_speed_gain(speed, TS, F0, P, rest_end=K_ON)
+    print(chk.line())
+    assert chk.gain_suspected is flagged
+    assert chk.offset == pytest.approx(SPEED_OFF, abs=0.05) and chk.offset_suspected
+    assert chk.ratio == pytest.approx(0.995 * gain, abs=0.002)
+    assert not chk.still_accelerating
+    if not flagged:
+        assert chk.line().startswith("speed at end 149") and ": plausible" in chk.line()
+
+
+def test_condition_record_report():
+    v, i, raw, speed = record(seed=6, clip=60.0)
+    rec, rep = condition_record(v, i, TS, speed, p=P)
+    lines = rep.lines()
+    print("\n".join(lines))
+    assert rep.switch_on is not None and abs(rep.switch_on - K_ON) <= 2
+    assert rec.first == rep.switch_on - 10 and rec.v.shape == (3, N - rec.first)
+    assert np.all(np.abs(rec.v[:, :8]) < 3.0)  # kept pre-trigger samples sit at zero after offset removal
+    assert [o[1] for o in rep.offsets] == pytest.approx([*V_OFF, *I_OFF], abs=0.05)
+    assert (~rec.weight).sum() == sum(rep.n_clipped) and sum(rep.n_saturated) == 0
+    assert sum(rep.n_clipped) == (np.abs(raw[:, rec.first:]) >= 60.0).sum() > 0
+    assert any(line.startswith(f"{sum(rep.n_clipped)} current samples clipped at +-60.") for line in lines)
+    assert abs(rep.f0 - F0) < 0.01 and "zero crossings" in lines[0]
+    assert rep.speed_check is not None and not rep.speed_check.gain_suspected
+    assert abs(rec.speed[:5]).max() < 2.0  # rest offset removed
+    tail_rec, tail_rep = condition_record(v[:, K_ON + 2000:], i[:, K_ON + 2000:], TS, f0=F0)
+    assert tail_rep.switch_on is None and tail_rec.first == 0
+    assert "nothing trimmed" in tail_rep.lines()[1]
+    assert [o[1] for o in tail_rep.offsets] == pytest.approx([*V_OFF, *I_OFF], abs=0.05)
