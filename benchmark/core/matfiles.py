@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from benchmark.core.errors import DataError
-from benchmark.core.tables import _did_you_mean, _one_line, read_bytes
+from benchmark.core.tables import _did_you_mean, check_optional_near_misses, _one_line, read_bytes
 
 
 def read_mat_table(
@@ -70,6 +70,7 @@ def read_mat_table(
         raise DataError(path, f"missing variable(s) {missing}{hint}; expected {options}; found {names}",
                         column=missing[0])
     keep = list(chosen) + [c for c in optional if c in have and c not in chosen]
+    check_optional_near_misses(path, optional, keep, names, "variable")
     if warn_unused:
         unused = [c for c in names if c not in keep]
         if unused:

@@ -241,6 +241,7 @@ def read_table(
             column=missing[0],
         )
     keep = list(chosen) + [c for c in optional if c in cols and c not in chosen]
+    check_optional_near_misses(path, optional, keep, names, "column")
     if warn_unused:
         unused = [c for c in names if c not in keep]
         if unused:
@@ -440,6 +441,19 @@ def check_time_column(path: Path, t: np.ndarray, column: str = "t", rel_tol: flo
             row=k + 1,
         )
     return step
+
+
+def check_optional_near_misses(path: Path, optional: Sequence[str], keep: Sequence[str], names: Sequence[str],
+                               what: str) -> None:
+    """An optional column that is absent while another column looks like it (``Speed`` for
+    ``speed``) is a DataError: it is probably misnamed, not missing on purpose."""
+    for c in optional:
+        if c in keep:
+            continue
+        hint = _did_you_mean(c, [n for n in names if n not in keep])
+        if hint:
+            raise DataError(path, f"no {what} '{c}'{hint}; rename it '{c}' (or remove it if the record has no {c})",
+                            column=c)
 
 
 def _did_you_mean(name: str, candidates: Sequence[str]) -> str:

@@ -45,7 +45,14 @@ PLAUSIBLE_SPEED_LIMIT = 1600.0
 SYNC_SPEED_MARGIN = 1.5
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
-             "inertia", "speed_unit", "description")
+             "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
+             "conditioning")
+#: Keys of ``nameplate`` in meta.yaml: rated power (W), voltage (V line-line rms), current (A rms),
+#: speed (rpm), frequency (Hz).
+NAMEPLATE_KEYS = ("rated_power", "voltage", "current", "speed", "frequency")
+#: Optional start-up columns: ``speed`` (a record without a speed sensor has none) and ``torque``
+#: (N m, a measured shaft torque).
+OPTIONAL_COLUMNS = ("speed", "torque")
 #: Units the speed columns may be written in (``speed_unit`` in meta.yaml; rad/s by default).
 SPEED_UNITS = ("rad/s", "rpm")
 #: File types a record may be stored in, read by these table readers.
@@ -57,7 +64,10 @@ MAX_POLE_PAIRS = 100
 class StartupRecord:
     """One start-up record, alpha-beta (amplitude-invariant), SI units.
 
-    Attributes: t (s), v_alpha, v_beta (V), i_alpha, i_beta (A), speed (mechanical rad/s).
+    Attributes: t (s), v_alpha, v_beta (V), i_alpha, i_beta (A), speed (mechanical rad/s; all
+    NaN when the record has no speed sensor), torque (N m, measured shaft torque, or None),
+    weight (False where a current sample is masked by the conditioning, e.g. clipped; None: all
+    samples count).
     """
 
     t: np.ndarray
@@ -67,6 +77,13 @@ class StartupRecord:
     i_beta: np.ndarray
     speed: np.ndarray
     source: str = "memory"
+    torque: np.ndarray | None = None
+    weight: np.ndarray | None = None
+
+    @property
+    def has_speed(self) -> bool:
+        """True when the record has a speed channel."""
+        return bool(np.any(np.isfinite(self.speed)))
 
 
 @dataclass
@@ -88,6 +105,11 @@ class StartupDataset:
     sample_time : sample time of the start-up records, s.
     input_hold : ``zoh`` (switch-state voltages) or ``linear`` (sampled continuous voltages).
     dc_link_voltage, supply_frequency, inertia : V, Hz, kg m^2, or None when not given.
+    stator_dc_resistance : ohm per phase measured with DC (prior knowledge), or None.
+    winding_temperature : deg C of the winding when the DC resistance was measured, or None.
+    nameplate : {rated_power (W), voltage (V line-line rms), current (A rms), speed (rpm),
+        frequency (Hz)}, any subset, or None.
+    conditioning : what the conditioning on load did (plain-English lines for report.md).
     """
 
     pole_pairs: int
@@ -99,6 +121,22 @@ class StartupDataset:
     supply_frequency: float | None = None
     inertia: float | None = None
     folder: str | None = None
+    stator_dc_resistance: float | None = None
+    winding_temperature: float | None = None
+    nameplate: dict | None = None
+    conditioning: list[str] = field(default_factory=list)
+
+    @property
+    def has_speed(self) -> bool:
+        """True when every start-up record has a speed channel."""
+        return all(r.has_speed for r in self.startups)
+
+    def facts(self) -> dict:
+        """What the experiment is, for screening candidate effects: ``dc_link_voltage``,
+        ``input_hold``, ``supply_frequency``, ``has_speed``, ``has_stop``."""
+        return {"dc_link_voltage": self.dc_link_voltage, "input_hold": self.input_hold,
+                "supply_frequency": self.supply_frequency, "has_speed": self.has_speed,
+                "has_stop": bool(self.stops)}
 
     def meta(self) -> dict:
         m = {
@@ -107,9 +145,12 @@ class StartupDataset:
             "sample_time": float(self.sample_time),
             "input_hold": self.input_hold,
         }
-        for key in ("dc_link_voltage", "supply_frequency", "inertia"):
+        for key in ("dc_link_voltage", "supply_frequency", "inertia", "stator_dc_resistance",
+                    "winding_temperature"):
             if getattr(self, key) is not None:
                 m[key] = float(getattr(self, key))
+        if self.nameplate:
+            m["nameplate"] = {k: float(v) for k, v in self.nameplate.items()}
         return m
 
 
@@ -140,12 +181,22 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         raise DataError(meta_path, f"key 'input_hold' must be 'zoh' or 'linear', got {_short_repr(hold)}")
     unit = _speed_unit(meta_path, meta.get("speed_unit", "rad/s"))
     optional = {}
-    for key in ("dc_link_voltage", "supply_frequency", "inertia"):
+    for key in ("dc_link_voltage", "supply_frequency", "inertia", "stator_dc_resistance"):
         if meta.get(key) is not None:
             meta[key] = check_meta_type(meta_path, key, meta[key], float)
             if not meta[key] > 0:
                 raise DataError(meta_path, f"key '{key}' must be > 0, got {meta[key]}")
             optional[key] = float(meta[key])
+    if meta.get("winding_temperature") is not None:
+        theta = check_meta_type(meta_path, "winding_temperature", meta["winding_temperature"], float)
+        if not -60.0 <= theta <= 250.0:
+            raise DataError(meta_path, f"key 'winding_temperature' must be in deg C (-60 to 250), got {theta}")
+        optional["winding_temperature"] = float(theta)
+    if meta.get("nameplate") is not None:
+        optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])
+    conditioning_on = meta.get("conditioning", True)
+    if not isinstance(conditioning_on, bool):
+        raise DataError(meta_path, f"key 'conditioning' must be true or false, got {_short_repr(conditioning_on)}")
 
     startup_files = _record_files(folder, "startup")
     if not startup_files:
@@ -154,7 +205,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     startups = [_read_startup(f, ts, max_bytes, speed_unit=unit) for f in startup_files]
     stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
     _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
-    return StartupDataset(
+    ds = StartupDataset(
         pole_pairs=p,
         sample_time=ts,
         startups=startups,
@@ -163,6 +214,28 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         folder=str(folder),
         **optional,
     )
+    if conditioning_on:
+        from benchmark.problems.timedomain.conditioning import condition_dataset
+
+        ds = condition_dataset(ds)
+    return ds
+
+
+def _nameplate(meta_path: Path, value) -> dict:
+    """``nameplate`` of meta.yaml: a mapping of positive numbers with known keys."""
+    if not isinstance(value, dict):
+        raise DataError(meta_path, f"key 'nameplate' must be a mapping of {list(NAMEPLATE_KEYS)}, got "
+                                   f"{_short_repr(value)}")
+    out = {}
+    for k, v in value.items():
+        if k not in NAMEPLATE_KEYS:
+            raise DataError(meta_path, f"key 'nameplate.{k}' unknown{_did_you_mean(str(k), NAMEPLATE_KEYS)}; "
+                                       f"known: {list(NAMEPLATE_KEYS)}")
+        x = check_meta_type(meta_path, f"nameplate.{k}", v, float)
+        if not x > 0:
+            raise DataError(meta_path, f"key 'nameplate.{k}' must be > 0, got {x}")
+        out[k] = float(x)
+    return out
 
 
 def _record_files(folder: Path, prefix: str) -> list[Path]:
@@ -194,15 +267,15 @@ def _speed_unit(meta_path: Path, value) -> str:
     return unit
 
 
-def _read_records_table(path: Path, alternatives, max_bytes: int | None):
+def _read_records_table(path: Path, alternatives, max_bytes: int | None, optional=()):
     reader = RECORD_READERS.get(path.suffix.lower(), read_table)
-    return reader(path, alternatives, max_bytes=max_bytes, warn_unused=True)
+    return reader(path, alternatives, optional, max_bytes=max_bytes, warn_unused=True)
 
 
 def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, *,
                   speed_unit: str = "rad/s") -> StartupRecord:
-    alternatives = [("t", *v, *i, "speed") for v in VOLTAGE_COLUMNS for i in CURRENT_COLUMNS]
-    df, cols = _read_records_table(path, alternatives, max_bytes)
+    alternatives = [("t", *v, *i) for v in VOLTAGE_COLUMNS for i in CURRENT_COLUMNS]
+    df, cols = _read_records_table(path, alternatives, max_bytes, optional=OPTIONAL_COLUMNS)
     t = df["t"].to_numpy()
     step = check_time_column(path, t)
     if abs(step - sample_time) > 1e-3 * sample_time:
@@ -231,9 +304,16 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
             k = int(np.argmax(~np.isfinite(x)))
             raise DataError(path, f"phase values too large: {name} computed from columns {source} overflows "
                                   "in the Clarke transform", row=k + 1)
-    speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
+    if "speed" in df:
+        speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
+    else:
+        speed = np.full(len(t), np.nan)
+        warnings.warn(DataWarning.at(path, "no speed column: a record without a speed sensor (the speed is "
+                                           "simulated, not fitted; J then comes from the currents alone)"),
+                      stacklevel=3)
+    torque = df["torque"].to_numpy() if "torque" in df else None
     return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed,
-                         source=str(path))
+                         source=str(path), torque=torque)
 
 
 def _read_stop(path: Path, max_bytes: int | None = None, *, speed_unit: str = "rad/s") -> StopRecord:
@@ -294,7 +374,7 @@ def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
     speed is an error. Without it, the
     frequency is estimated from the current phasor's rotation, and exceeding the margin is
     only a :class:`DataWarning` (the estimate can be fooled), typically a column in rpm."""
-    records = [(r.source, r.speed) for r in startups] + [(r.source, r.speed) for r in stops]
+    records = [(r.source, r.speed) for r in startups if r.has_speed] + [(r.source, r.speed) for r in stops]
     if supply_frequency is not None:
         w_sync = 2 * np.pi * supply_frequency / p
         basis = f"supply_frequency {supply_frequency:g} Hz and pole_pairs {p} in meta.yaml"
@@ -335,12 +415,12 @@ def write_startup_dataset(folder, ds: StartupDataset, truth: dict | None = None)
     folder.mkdir(parents=True, exist_ok=True)
     for k, r in enumerate(ds.startups):
         name = "startup.csv" if len(ds.startups) == 1 else f"startup_{k + 1}.csv"
-        write_table_atomic(
-            folder / name,
-            {"t": r.t, "v_alpha": r.v_alpha, "v_beta": r.v_beta, "i_alpha": r.i_alpha, "i_beta": r.i_beta,
-             "speed": r.speed},
-            float_format="%.17g",
-        )
+        table = {"t": r.t, "v_alpha": r.v_alpha, "v_beta": r.v_beta, "i_alpha": r.i_alpha, "i_beta": r.i_beta}
+        if r.has_speed:
+            table["speed"] = r.speed
+        if r.torque is not None:
+            table["torque"] = r.torque
+        write_table_atomic(folder / name, table, float_format="%.17g")
     for k, r in enumerate(ds.stops):
         name = "stop.csv" if len(ds.stops) == 1 else f"stop_{k + 1}.csv"
         write_table_atomic(folder / name, {"t": r.t, "speed": r.speed}, float_format="%.17g")

@@ -16,7 +16,7 @@ import pytest
 import scipy.io
 import yaml
 
-from benchmark.core.errors import DataError
+from benchmark.core.errors import DataError, DataWarning
 from benchmark.problems.timedomain.data import load_startup_dataset, write_startup_dataset
 from benchmark.problems.timedomain.frames import inverse_clarke
 from tests.conftest import compose_config
@@ -151,18 +151,30 @@ def _startup_vars(base_set) -> dict:
 
 
 @pytest.mark.parametrize("name, expected", [
-    ("speed", ["startup.mat, column 'speed'", "missing variable(s) ['speed']", "found ['t', 'v_alpha'"]),
-    ("Speed", ["startup.mat, column 'speed'", "(found 'Speed': names are case-sensitive)"]),
+    ("i_beta", ["startup.mat, column 'i_beta'", "missing variable(s) ['i_beta']", "found ['t', 'v_alpha'"]),
+    ("Speed", ["startup.mat, column 'speed'", "no variable 'speed' (found 'Speed': names are case-sensitive)"]),
 ])
 def test_missing_variable_names_the_file_and_the_variable(tmp_path, base_set, name, expected):
     v = _startup_vars(base_set)
-    speed = v.pop("speed")
-    if name != "speed":
-        v[name] = speed
+    if name == "Speed":
+        v[name] = v.pop("speed")
+    else:
+        v.pop(name)
     with pytest.raises(DataError) as err:
         load_startup_dataset(_mat_set(tmp_path, base_set, v))
     for s in expected:
         assert s in str(err.value), str(err.value)
+
+
+def test_a_record_without_a_speed_column_is_a_record_without_a_speed_sensor(tmp_path, base_set):
+    """No speed variable: the record loads with its speed all NaN, says so, and keeps the rest."""
+    v = _startup_vars(base_set)
+    v.pop("speed")
+    with pytest.warns(DataWarning, match="no speed column: a record without a speed sensor"):
+        ds = load_startup_dataset(_mat_set(tmp_path, base_set, v))
+    rec = ds.startups[0]
+    assert not rec.has_speed and not ds.has_speed and np.isnan(rec.speed).all()
+    np.testing.assert_array_equal(rec.i_beta, v["i_beta"])
 
 
 @pytest.mark.parametrize("change, expected", [

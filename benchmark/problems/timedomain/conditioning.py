@@ -1,0 +1,146 @@
+"""Conditioning on load: what a bench record needs before the model may be fitted to it.
+
+:func:`condition_dataset` runs :func:`benchmark.problems.timedomain.record_conditioning.condition_record`
+on every start-up record (phase quantities recovered from alpha-beta; a three-wire record has no
+zero sequence) and applies what it finds:
+
+* switch-on: a pre-trigger (zero voltage before the contactor closes) is trimmed to a few
+  samples, so the simulation starts from rest at zero voltage; contact bounce is kept (the
+  model is fed the measured voltages);
+* sensor offsets: estimated from the pre-trigger, else from whole supply periods of the
+  steady tail, and removed when they are significant: larger than
+  :data:`OFFSET_SIGNIFICANCE` of the channel's amplitude (0.3 V on a 325 V phase, 9 mA on a
+  9 A no-load current), so that clean and merely noisy records are left bit for bit as they
+  are. Voltages computed from switch states (``input_hold: zoh``) are not measured and get
+  no voltage offset;
+* clipped (hard) or flattened (soft-saturated probe) current samples are masked:
+  ``StartupRecord.weight`` is False there, with the count reported. The soft test looks for a
+  third harmonic that flattens the peaks, which an inverter's six-step or PWM currents
+  imitate (their 5th and 7th harmonics flatten peaks too): it runs on grid-fed records only;
+* the speed's rest offset (pre-trigger) is removed, and its gain is checked against the
+  synchronous speed at the end of an unloaded start (reported, never corrected).
+
+Every step says what it did in ``StartupDataset.conditioning`` (lines for report.md). A data
+set whose ``meta.yaml`` says ``conditioning: false`` is left as it is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
+from benchmark.problems.timedomain.frames import clarke, inverse_clarke
+from benchmark.problems.timedomain.record_conditioning import condition_record
+
+#: An offset is removed only when it exceeds this fraction of its channel's amplitude.
+OFFSET_SIGNIFICANCE = 1e-3
+#: A record shorter than this many supply periods is not conditioned (too short to tell).
+MIN_PERIODS = 3.0
+
+
+#: The tail is steady when the RMS current of its supply periods varies by less than this.
+STEADY_TOLERANCE = 0.02
+
+
+def steady_tail(i: np.ndarray, ts: float, f0: float, periods: int = 5) -> bool:
+    """True when the RMS current of each of the last ``periods`` supply periods is within
+    :data:`STEADY_TOLERANCE` of their mean (a start-up that has settled)."""
+    m = int(round(1.0 / (f0 * ts)))
+    n = i.shape[-1]
+    if m < 4 or n < periods * m:
+        return False
+    tail = i[..., n - periods * m:].reshape(i.shape[0], periods, m)
+    rms = np.sqrt(np.mean(tail**2, axis=(0, 2)))
+    return bool(np.ptp(rms) <= STEADY_TOLERANCE * np.mean(rms))
+
+
+def condition_dataset(ds: StartupDataset) -> StartupDataset:
+    """The data set with every start-up record conditioned (see the module docstring)."""
+    records, lines = [], []
+    for k, rec in enumerate(ds.startups):
+        name = f"startup record {k + 1}" if len(ds.startups) > 1 else "start-up record"
+        new, said = condition_startup(rec, ds.sample_time, ds.pole_pairs, ds.supply_frequency,
+                                      measured_voltage=ds.input_hold != "zoh")
+        records.append(new)
+        lines += [f"{name}: {s}" for s in said]
+    return replace(ds, startups=records, conditioning=list(ds.conditioning) + lines)
+
+
+def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_frequency: float | None,
+                      measured_voltage: bool = True) -> tuple[StartupRecord, list[str]]:
+    """One record conditioned, and what was done (plain-English lines)."""
+    n = len(rec.t)
+    v = np.vstack(inverse_clarke(rec.v_alpha, rec.v_beta))
+    i_r, i_s, _ = inverse_clarke(rec.i_alpha, rec.i_beta)
+    i = np.vstack([i_r, i_s])
+    if not np.any(v) or n < 16:
+        return rec, ["not conditioned: no voltage or too few samples"]
+    speed = rec.speed if rec.has_speed else None
+    with np.errstate(all="ignore"):
+        try:
+            cond, report = condition_record(v, i, ts, speed, f0=supply_frequency, p=pole_pairs,
+                                            soft=measured_voltage)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError, IndexError) as exc:
+            return rec, [f"not conditioned ({type(exc).__name__}: {exc})"]
+    if not np.isfinite(report.f0) or report.f0 <= 0 or n * ts * report.f0 < MIN_PERIODS:
+        return rec, ["not conditioned: fewer than three supply periods"]
+    said = [f"supply frequency {report.f0:.3f} Hz ({report.f0_source})"]
+    first = cond.first
+    if report.switch_on is not None:
+        said.append(f"switch-on at t = {report.switch_on * ts:.4f} s: {first} pre-trigger samples trimmed "
+                    f"({report.n_kept_before} kept before it; contact bounce kept)")
+    else:
+        said.append("no pre-trigger: the record starts energised")
+    removed, kept = [], []
+    offsets = {name: (value, unit, how) for name, value, unit, how in report.offsets}
+    from_tail = report.switch_on is None or report.switch_on < 50
+    if from_tail and not steady_tail(i, ts, report.f0):
+        said.append("sensor offsets not estimated: no pre-trigger and the record does not reach a steady state "
+                    "(its last supply periods still change)")
+        offsets = {name: (0.0, unit, how) for name, (value, unit, how) in offsets.items()}
+    v_out, i_out = v.copy(), i.copy()
+    for row, name in enumerate(("v_r", "v_s", "v_t")):
+        value, unit, how = offsets[name]
+        amplitude = np.sqrt(2.0) * np.std(v[row, n // 2:])
+        if measured_voltage and abs(value) > OFFSET_SIGNIFICANCE * amplitude:
+            v_out[row] -= value
+            removed.append(f"{name} {value:+.2f} V ({how.split(' over ')[0]})")
+        else:
+            kept.append(f"{name} {value:+.3g} V")
+    for row, name in enumerate(("i_r", "i_s")):
+        value, unit, how = offsets[name]
+        amplitude = np.sqrt(2.0) * np.std(i[row, n // 2:])
+        if abs(value) > OFFSET_SIGNIFICANCE * amplitude:
+            i_out[row] -= value
+            removed.append(f"{name} {value:+.3f} A ({how.split(' over ')[0]})")
+        else:
+            kept.append(f"{name} {value:+.3g} A")
+    if removed:
+        said.append("offsets removed: " + ", ".join(removed))
+    elif "sensor offsets not estimated" not in said[-1]:
+        said.append("no significant sensor offset")
+    if kept and removed:
+        said.append("offsets below significance left in place: " + ", ".join(kept))
+    weight = cond.weight.all(axis=0)  # already trimmed: (m,) from the first kept sample
+    n_masked = int((~weight).sum())
+    if n_masked:
+        said.append(f"{n_masked} current samples masked: {sum(report.n_clipped)} hard-clipped, "
+                    f"{sum(report.n_saturated)} on flattened (soft-saturated) peaks")
+    speed_out = rec.speed
+    if speed is not None and np.isfinite(report.speed_offset):
+        speed_out = rec.speed - report.speed_offset
+        said.append(f"speed offset {report.speed_offset:+.4g} rad/s (rest before switch-on) removed")
+    if report.speed_check is not None:
+        said.append(report.speed_check.line())
+    if first == 0 and not removed and not n_masked and speed_out is rec.speed:
+        return rec, said
+    v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
+    i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
+    sl = slice(first, n)
+    return StartupRecord(
+        t=rec.t[sl] - rec.t[first], v_alpha=v_a[sl], v_beta=v_b[sl], i_alpha=i_a[sl], i_beta=i_b[sl],
+        speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
+        weight=None if not n_masked else weight,
+    ), said
