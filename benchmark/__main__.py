@@ -26,13 +26,26 @@ from benchmark.core.harness import format_table, run
 def main(cfg) -> float | None:
     outdir = Path(HydraConfig.get().runtime.output_dir)
     outcome = run(cfg, outdir)
-    print(format_table(outcome.record))
+    rec = outcome.record
+    if HydraConfig.get().mode == RunMode.MULTIRUN:  # a sweep: one line per run, not interleaved tables
+        print(one_line(rec, outdir), flush=True)
+        return rec["cost"]
+    print(format_table(rec))
     print(f"result: {outdir / 'result.json'}")
-    if (outcome.record.get("figures") or {}).get("report"):
-        print(f"report: {outdir / outcome.record['figures']['report']} (figures)")
-    if outcome.record["status"] in ("failed", "timeout") and HydraConfig.get().mode == RunMode.RUN:
+    if (rec.get("figures") or {}).get("report"):
+        print(f"report: {outdir / rec['figures']['report']} (figures)")
+    if rec["status"] in ("failed", "timeout"):
         sys.exit(3)
-    return outcome.record["cost"]
+    return rec["cost"]
+
+
+def one_line(rec: dict, outdir: Path) -> str:
+    """``problem/optimizer seed S: status, cost C, N evaluations, T s, W warnings -> folder``."""
+    cost = rec.get("cost")
+    warnings = len(rec.get("warnings") or [])
+    return (f"{rec['problem']}/{rec['optimizer']} seed {rec['seed']}: {rec['status']}, cost "
+            f"{'-' if cost is None else f'{cost:.6g}'}, {rec['evaluations']} evaluations, "
+            f"{rec['wall_time_s']:.1f} s" + (f", {warnings} warning(s)" if warnings else "") + f" -> {outdir}")
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ base identification to use (the configured optimiser, then polish).
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import hydra
@@ -22,9 +23,23 @@ from benchmark.core.harness import run_diagnosis
 @user_errors
 def main(cfg) -> None:
     outdir = Path(HydraConfig.get().runtime.output_dir)
-    run_diagnosis(cfg, outdir, progress=lambda name: print(f"  fitting {name}", flush=True))
+    try:
+        run_diagnosis(cfg, outdir, progress=lambda name: print(f"  fitting {name}", flush=True))
+    except BaseException:
+        remove_if_nothing_written(outdir)
+        raise
     print((outdir / "diagnosis.md").read_text(encoding="utf-8"))
     print(f"written: {outdir / 'diagnosis.json'}")
+
+
+def remove_if_nothing_written(outdir: Path) -> None:
+    """A diagnosis that failed before writing anything leaves no folder behind: the run folder
+    is removed when it holds only Hydra's own files (.hydra/, the log)."""
+    if not outdir.is_dir():
+        return
+    ours = [f for f in outdir.iterdir() if f.name != ".hydra" and f.suffix != ".log"]
+    if not ours:
+        shutil.rmtree(outdir, ignore_errors=True)
 
 
 if __name__ == "__main__":

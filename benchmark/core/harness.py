@@ -9,6 +9,7 @@ problem, ``cfg.optimizer.plugin`` the optimiser. The harness counts evaluations 
 from __future__ import annotations
 
 import contextlib
+import difflib
 import functools
 import importlib
 import inspect
@@ -32,6 +33,7 @@ from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
 from benchmark.core.io import write_table_atomic, write_text_atomic
 from benchmark.core.journal import EvaluationJournal
+from benchmark.core.quality import assess
 from benchmark.core.problem import OptimizeResult, Problem, Status
 from benchmark.core.progress import ProgressBar, progress_wanted
 from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
@@ -72,6 +74,7 @@ def validate_config(cfg: DictConfig) -> None:
     for key in ("problem", "optimizer", "motor"):
         if key not in cfg or cfg[key] is None:
             raise ConfigError(f"{key}: missing config group")
+    check_top_level_keys(cfg)
     if "plugin" not in cfg.optimizer or "_target_" not in cfg.optimizer.plugin:
         raise ConfigError("optimizer.plugin._target_: the optimiser config must name its plugin function")
     if "setup" not in cfg.problem or "_target_" not in cfg.problem.setup:
@@ -113,6 +116,34 @@ def validate_config(cfg: DictConfig) -> None:
     if check is not None:
         check(resolved(cfg))
     check_plugin(cfg)
+
+
+#: The primary configuration of ``python -m benchmark``: its top-level keys are the only ones a
+#: run accepts (a misspelt ``+seeed=1`` would otherwise run silently with seed 0).
+PRIMARY_CONFIG = Path(__file__).resolve().parents[2] / "conf" / "config.yaml"
+
+
+def known_top_level_keys() -> list[str]:
+    """Top-level keys of conf/config.yaml and its config groups."""
+    doc = yaml.safe_load(PRIMARY_CONFIG.read_text(encoding="utf-8")) or {}
+    groups = []
+    for entry in doc.get("defaults", []):
+        if isinstance(entry, dict):
+            for k in entry:
+                k = str(k).split(" ")[-1].split("@")[0]
+                if not k.startswith("hydra") and k != "_self_":
+                    groups.append(k)
+    return sorted({*(k for k in doc if k not in ("defaults", "hydra")), *groups})
+
+
+def check_top_level_keys(cfg: DictConfig) -> None:
+    """A ConfigError naming a top-level key the project does not know, with the nearest one."""
+    known = known_top_level_keys()
+    for key in cfg:
+        if key not in known and key != "hydra":
+            close = difflib.get_close_matches(str(key), known, n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            raise ConfigError(f"{key}: unknown key{hint}; the keys of a run are {known}")
 
 
 def resolved(cfg: DictConfig) -> dict:
@@ -316,6 +347,8 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
     wall = time.perf_counter() - t_start
 
+    data_path = (cfg.get("data") or {}).get("path")
+    assessment = assess(problem, x_best, status=ident.status, data_path=data_path, budget=budget)
     estimate = problem.estimate(x_best) if x_best is not None else None
     truth = problem.truth
     rel_error = score(estimate, truth) if estimate is not None else None
@@ -328,7 +361,8 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "problem": problem.name,
         "optimizer": name,
         "seed": seed,
-        "status": result.status.value,
+        "status": ident.status,
+        "status_optimizer": result.status.value,
         "message": result.message,
         "parameter_names": list(problem.parameter_names),
         "searched": None if x_best is None else dict(zip(problem.parameter_names, map(float, x_best),
@@ -336,6 +370,11 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "estimate": estimate,
         "truth": truth,
         "rel_error": rel_error,
+        # uncertainty of the searched parameters at the final point (benchmark.core.quality)
+        "standard_error": assessment["standard_error"],
+        "correlation": assessment["correlation"],
+        "uncertainty": assessment["uncertainty"],
+        "fit_quality": assessment["fit_quality"],
         "cost": _finite_or_none(f_best),
         "cost_optimizer": _finite_or_none(result.fun),
         "evaluations": result.nfev + (polish_info or {}).get("evaluations", 0),
@@ -351,7 +390,9 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "bounds": {n: [float(lo), float(hi)] for n, lo, hi in zip(problem.parameter_names, problem.lower,
                                                                  problem.upper, strict=True)},
         "problem_info": problem.describe(),
-        "warnings": run_warnings,
+        # what the user must know before trusting the estimate (empty when all is well): the
+        # data and set-up's own, then the verdict on the fit (benchmark.core.quality)
+        "warnings": run_warnings + assessment["warnings"],
         "resume": resume_info,
         "fingerprint": fingerprint,
         "config": OmegaConf.to_container(cfg, resolve=True),
@@ -414,11 +455,13 @@ def _json_default(o):
 def format_table(record: dict) -> str:
     """The short table printed after a run: parameter, estimate, truth, error."""
     est, truth, err = record["estimate"] or {}, record["truth"] or {}, record["rel_error"] or {}
-    lines = [f"{'parameter':<10}{'estimate':>14}{'truth':>14}{'error':>10}"]
+    se = record.get("standard_error") or {}
+    lines = [f"{'parameter':<10}{'estimate':>14}{'truth':>14}{'error':>10}{'std err':>12}"]
     for k, v in est.items():
         t = f"{truth[k]:14.6g}" if k in truth else f"{'-':>14}"
         e = f"{100 * err[k]:+9.3f}%" if k in err else f"{'-':>10}"
-        lines.append(f"{k:<10}{v:14.6g}{t}{e}")
+        s = f"{se[k]:12.3g}" if se.get(k) is not None else f"{'-':>12}"
+        lines.append(f"{k:<10}{v:14.6g}{t}{e}{s}")
     cost = record["cost"]
     lines.append(
         f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}, "
@@ -427,4 +470,12 @@ def format_table(record: dict) -> str:
     )
     if record["status"] in (Status.FAILED.value, Status.TIMEOUT.value):
         lines.append(f"{record['status']}: {record['message']}")
+    fq = {k: v for k, v in (record.get("fit_quality") or {}).items() if isinstance(v, dict)}
+    if fq:
+        lines.append("fit quality (RMS misfit / noise): " + ", ".join(
+            f"{k} {v['ratio']:.3g}{'' if v['at_noise_level'] else ' (!)' if v['ratio'] > v['threshold'] else ''}"
+            for k, v in fq.items()))
+    warns = record.get("warnings") or []
+    lines.append(f"warnings: {len(warns)}" if warns else "warnings: none")
+    lines += [f"  - {w}" for w in warns]
     return "\n".join(lines)
