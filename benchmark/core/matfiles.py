@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from benchmark.core.errors import DataError
-from benchmark.core.tables import _did_you_mean, check_optional_near_misses, _one_line, read_bytes
+from benchmark.core.tables import _one_line, read_bytes, select_columns
 
 
 def read_mat_table(
@@ -60,24 +60,7 @@ def read_mat_table(
     names = [str(k) for k in doc if not str(k).startswith("__")]
     if not names:
         raise DataError(path, "holds no variables")
-    have = set(names)
-    chosen = next((tuple(a) for a in alternatives if set(a) <= have), None)
-    if chosen is None:
-        best = max(alternatives, key=lambda a: len(set(a) & have))
-        missing = [c for c in best if c not in have]
-        options = " or ".join("(" + ", ".join(a) + ")" for a in alternatives)
-        hint = _did_you_mean(missing[0], [c for c in names if c not in best])
-        raise DataError(path, f"missing variable(s) {missing}{hint}; expected {options}; found {names}",
-                        column=missing[0])
-    keep = list(chosen) + [c for c in optional if c in have and c not in chosen]
-    check_optional_near_misses(path, optional, keep, names, "variable")
-    if warn_unused:
-        unused = [c for c in names if c not in keep]
-        if unused:
-            from benchmark.core.errors import DataWarning
-
-            warnings.warn(DataWarning.at(path, f"variable(s) {unused} not used (ignored); used: {keep}"),
-                          stacklevel=2)
+    chosen, keep = select_columns(path, names, alternatives, optional, warn_unused, "variable")
     out = {c: _mat_vector(path, c, doc[c]) for c in keep}
     n = len(out[keep[0]])
     for c in keep[1:]:

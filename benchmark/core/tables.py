@@ -228,27 +228,7 @@ def read_table(
         k = int(np.argmax(empty_row[:n]))
         raise DataError(path, "blank line between data rows (delete it)", row=k + 1)
 
-    cols = set(names)
-    chosen = next((tuple(a) for a in alternatives if set(a) <= cols), None)
-    if chosen is None:
-        best = max(alternatives, key=lambda a: len(set(a) & cols))
-        missing = [c for c in best if c not in cols]
-        options = " or ".join("(" + ", ".join(a) + ")" for a in alternatives)
-        hint = _did_you_mean(missing[0], [c for c in names if c not in best])
-        raise DataError(
-            path,
-            f"missing column(s) {missing}{hint}; expected {options}; found {names}",
-            column=missing[0],
-        )
-    keep = list(chosen) + [c for c in optional if c in cols and c not in chosen]
-    check_optional_near_misses(path, optional, keep, names, "column")
-    if warn_unused:
-        unused = [c for c in names if c not in keep]
-        if unused:
-            from benchmark.core.errors import DataWarning
-
-            warnings.warn(DataWarning.at(path, f"column(s) {unused} not used (ignored); used: {keep}"),
-                          stacklevel=2)
+    chosen, keep = select_columns(path, names, alternatives, optional, warn_unused, "column")
     decimal_comma = sep != "," and _uses_decimal_comma(path, df[keep])
     out = {}
     for c in keep:
@@ -441,6 +421,32 @@ def check_time_column(path: Path, t: np.ndarray, column: str = "t", rel_tol: flo
             row=k + 1,
         )
     return step
+
+
+def select_columns(path: Path, names: Sequence[str], alternatives: Sequence[Sequence[str]],
+                   optional: Sequence[str], warn_unused: bool, what: str) -> tuple[tuple[str, ...], list[str]]:
+    """The first column set of ``alternatives`` that ``names`` holds, and the columns to keep
+    (it plus the optional ones present). A DataError names the missing ``what`` (column or
+    variable) and a near miss; a DataWarning lists the unused ones when ``warn_unused``."""
+    have = set(names)
+    chosen = next((tuple(a) for a in alternatives if set(a) <= have), None)
+    if chosen is None:
+        best = max(alternatives, key=lambda a: len(set(a) & have))
+        missing = [c for c in best if c not in have]
+        options = " or ".join("(" + ", ".join(a) + ")" for a in alternatives)
+        hint = _did_you_mean(missing[0], [c for c in names if c not in best])
+        raise DataError(path, f"missing {what}(s) {missing}{hint}; expected {options}; found {list(names)}",
+                        column=missing[0])
+    keep = list(chosen) + [c for c in optional if c in have and c not in chosen]
+    check_optional_near_misses(path, optional, keep, names, what)
+    if warn_unused:
+        unused = [c for c in names if c not in keep]
+        if unused:
+            from benchmark.core.errors import DataWarning
+
+            warnings.warn(DataWarning.at(path, f"{what}(s) {unused} not used (ignored); used: {keep}"),
+                          stacklevel=3)
+    return chosen, keep
 
 
 def check_optional_near_misses(path: Path, optional: Sequence[str], keep: Sequence[str], names: Sequence[str],
