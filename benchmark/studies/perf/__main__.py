@@ -304,6 +304,14 @@ def section_identification(quick: bool) -> dict:
     return {"budget": int(budget), "runs": runs}
 
 
+def section_diagnosis() -> dict:
+    """One diagnosis (every candidate, forward selection) in a fresh interpreter, warm cache."""
+    with tempfile.TemporaryDirectory(prefix="imbench-numba-cache-") as d:
+        _run_probe("compile", [], d)  # fill the cache: the diagnosis is timed as a user's second run
+        rec, wall = _run_probe("diagnose", [CONF], d, threads=2)
+    return {"record": rec, "process_wall": wall}
+
+
 def main(argv=None) -> int:
     opts = parse_args(sys.argv[1:] if argv is None else argv)
     quick = opts["quick"]
@@ -339,8 +347,12 @@ def main(argv=None) -> int:
     ident = section_identification(quick)
     for name, (rec, wall) in ident["runs"].items():
         say(f"  {name}: {wall:.2f} s wall, {rec['evaluations']} evaluations")
+    say("diagnosis (fresh interpreter, warm cache)")
+    diag = section_diagnosis()
+    say(f"  {diag['record']['wall_s']:.1f} s, verdict {diag['record']['verdict']}")
     load1 = os.getloadavg()[0]
-    text = report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, time.perf_counter() - t_start)
+    text = report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, time.perf_counter() - t_start,
+                  diag)
     print()
     print(text)
     out = Path(opts["out"])

@@ -12,7 +12,7 @@ from benchmark.studies.perf.references import _motor_terms, eq15_cost, numpy_rk4
 
 
 # -- report -------------------------------------------------------------------------------------
-def report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, elapsed) -> str:
+def report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, elapsed, diag=None) -> str:
     rates = thr["rates"]
     k1 = rates.get((1, 1), math.nan)
     best2 = rates.get((2, 1000), rates.get((1, 1000)))
@@ -281,5 +281,15 @@ def report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, ela
                 for name in ("cold cache, 2 threads", "warm cache, 2 threads", "warm cache, 2 threads, figures=false")
             )
             + ".\n"
+        )
+    if diag is not None:
+        d = diag["record"]
+        L.append(
+            "\n## Diagnosis\n\nOne `python -m benchmark.diagnose` of the 1 s, 12 kHz start-up (the default motor, a "
+            "double cage injected, noisy preset) with every candidate of the catalogue and forward selection, in a "
+            f"fresh interpreter with a warm cache: **{d['wall_s']:.1f} s** inside the diagnosis "
+            f"({diag['process_wall']:.1f} s for the whole process, {d['cpu_s']:.1f} CPU s); verdict "
+            f"`{d['verdict']}` ({d['status']}). Target <= 60 s on 2 cores: "
+            f"{'met' if d['wall_s'] <= 60 else 'NOT met'}.\n"
         )
     return "\n".join(L) + "\n"
