@@ -1,8 +1,9 @@
 """Synthetic start-up / free-stop data sets from known parameters.
 
-The plant is the model of MODEL.md section 1 integrated with RK4 at ``plant_substeps`` steps
-per sample (finer than the identification model's one step), so that the data are not the
-identification model's own discretisation. Noise (``run.noise``): white noise on the two
+The plant is the time-domain model (:mod:`benchmark.problems.timedomain.motor`; with effects,
+the extended model) integrated with RK4 at ``plant_substeps`` steps per sample (finer than the
+identification model's one step), so that the data are not the identification model's own
+discretisation. Noise (``run.noise``): white noise on the two
 current channels (A) and on speed (rad/s), and speed quantisation (rad/s), from the
 generator ``numpy.random.default_rng(noise.seed)``.
 """
@@ -24,7 +25,8 @@ def motor_from_config(run) -> InductionMotor:
         return InductionMotor(**{n: float(run["motor"]["parameters"][n]) for n in PARAMETER_NAMES},
                               p=int(run["motor"]["pole_pairs"]))
     except (KeyError, TypeError) as exc:
-        raise ConfigError(f"motor.parameters: the preset must give {list(PARAMETER_NAMES)} and pole_pairs ({exc})") from None
+        raise ConfigError(f"motor.parameters: the preset must give {list(PARAMETER_NAMES)} and pole_pairs "
+                          f"({exc})") from None
     except ValueError as exc:
         raise ConfigError(f"motor.parameters: {exc}") from None
 
@@ -43,32 +45,71 @@ def add_noise(x: np.ndarray, std: float, quantum: float, rng: np.random.Generato
     return y
 
 
+def _run_extended(row: np.ndarray, test: StartupStopTest, substeps: int) -> dict:
+    """Start-up and stop on an extended-model row, with the time running on through the stop
+    (so that a load step keeps its instant)."""
+    from benchmark.problems.timedomain.extended import N_STATES, simulate_extended
+    from benchmark.problems.timedomain.protocol import _stop_record
+    from benchmark.problems.timedomain.simulation import hold_is_linear
+
+    t, v_a, v_b = test.startup_voltages()
+    h = test.sample_time
+    x = np.zeros(N_STATES)
+    y = simulate_extended(row, v_a, v_b, hold_is_linear(test.input_hold), h, substeps, x, 0.0)
+    startup = {"t": t, "v_alpha": v_a, "v_beta": v_b, "i_alpha": y[0], "i_beta": y[1], "speed": y[2]}
+    # one more step with the last start-up voltage, then the stator is shorted (v = 0)
+    simulate_extended(row, v_a[-1:].repeat(2), v_b[-1:].repeat(2), False, h, substeps, x, float(t[-1]))
+    zeros = np.zeros(int(round(test.stop_duration / h)) + 1)
+    w_m = simulate_extended(row, zeros, zeros, False, h, substeps, x, float(t[-1]) + h)[2]
+    return {"startup": startup, "stop": _stop_record(w_m, test)}
+
+
 def plant_with_effects(motor: InductionMotor, test: StartupStopTest, effects: list[str], sizes: dict,
                        forms: dict, substeps: int) -> tuple[dict, list[dict]]:
     """Simulate the experiment on the extended plant with the named effects injected.
 
-    Sizes default to the geometric middle of each effect's realistic range. Returns the
-    records and the list of injected effects (name, size, unit, form) for truth.yaml."""
+    Row effects edit the extended-model row (``Effect.plant``); sensor effects then act on the
+    simulated record, in the order of the sensor chain (``Effect.measure_stage``): the
+    recorded voltages (``Effect.plant_voltages``) and currents and speed
+    (``Effect.plant_measure`` with the extras of ``Effect.plant_extras``), the stop record's
+    speed too. Sizes default to the geometric middle of each effect's realistic range.
+    Returns the records and the list of injected effects (name, size, unit, form) for
+    truth.yaml."""
     from benchmark.core.effects import effect_context, load_effects
     from benchmark.problems.timedomain.extended import base_row
-    from benchmark.problems.timedomain.protocol import run_startup_stop_extended
 
     catalogue = load_effects("timedomain", names=list(effects))
     row = base_row(motor)
-    base = run_startup_stop_extended(row, test, substeps)["startup"]
+    base = _run_extended(row, test, substeps)["startup"]
     ctx = effect_context(base["t"], base["v_alpha"], base["v_beta"], base["i_alpha"], base["i_beta"],
                          base["speed"], motor.p, motor.J, motor.Ls - motor.Le, motor.Le,
                          test.dc_link_voltage)
-    injected = []
+    injected, sensors = [], []
     for name in effects:
         eff = catalogue[name]
         lo, hi = eff.realistic
         size = float(sizes.get(name, np.sqrt(lo * hi)))
         form = {**eff.form, **dict(forms.get(name, {}) or {})}
         row = eff.plant(row, size, ctx, form)
-        injected.append({"name": name, "size": size, "size_name": eff.size_name, "unit": eff.size_unit,
-                         "form": form})
-    return run_startup_stop_extended(row, test, substeps), injected
+        entry = {"name": name, "size": size, "size_name": eff.size_name, "unit": eff.size_unit, "form": form}
+        extras = eff.plant_extras(size, ctx, form)
+        if extras is not None:
+            entry["measure_extras"] = {n: float(v) for n, v in zip(eff.extra_names, np.ravel(extras), strict=False)}
+        sensors.append((eff, size, form, extras))
+        injected.append(entry)
+    rec = _run_extended(row, test, substeps)
+    s = rec["startup"]
+    sensors.sort(key=lambda e: e[0].measure_stage)
+    for eff, size, form, extras in sensors:
+        s["v_alpha"], s["v_beta"] = eff.plant_voltages(s["v_alpha"], s["v_beta"], size, ctx, form)
+        if extras is None:
+            continue
+        sim = eff.plant_measure(np.stack([s["i_alpha"], s["i_beta"], s["speed"]])[None], extras, ctx, form)[0]
+        s["i_alpha"], s["i_beta"], s["speed"] = sim[0], sim[1], sim[2]
+        st = rec["stop"]["speed"]
+        stop = np.stack([np.zeros_like(st), np.zeros_like(st), st])[None]
+        rec["stop"]["speed"] = eff.plant_measure(stop, extras, ctx, form)[0][2]
+    return rec, injected
 
 
 def make_dataset(run) -> tuple[StartupDataset, dict]:

@@ -1,10 +1,17 @@
-"""The unmodelled-effect catalogue (MODEL.md section 6).
+"""The unmodelled-effect catalogue (the sim-to-real effects; names are part of the interface).
 
 Each effect exists twice: in the synthetic plant that makes "real" data (:meth:`Effect.plant`,
 with a size in a documented realistic range and optional variations of its form), and as an
 augmentation of the identification model with its own extra parameters
 (:meth:`Effect.augment`). Both act on rows of the extended model
-(:mod:`benchmark.problems.timedomain.extended`).
+(:mod:`benchmark.problems.timedomain.extended`). Sensor effects act on the recorded channels
+instead (:meth:`Effect.measure`, after the simulation); an augmented model is
+
+    rows = base rows -> augment of each chosen effect in turn -> simulate -> measure of each
+    chosen effect in turn (ordered by :attr:`Effect.measure_stage`).
+
+An effect also says whether it can occur in an experiment (:meth:`Effect.applies_to`, from the
+data set's facts) and draws its own variation of form for blind tests (:meth:`Effect.random_form`).
 
 A new effect is one class (a subclass of :class:`Effect`) plus one YAML in ``conf/effect/``
 naming it with ``_target_``; :func:`load_effects` builds them all.
@@ -30,7 +37,10 @@ class EffectContext:
     Attributes: w_e (supply angular frequency, rad/s), V1 (fundamental voltage amplitude, V),
     I_peak (peak start-up current, A), w_sync (synchronous mechanical speed, rad/s),
     dc_link_voltage (V, or the six-step equivalent pi V1 / 2), E_cu (copper-loss energy of the
-    start-up, J), L_M (magnetising inductance of the base model, H), L_sigma (leakage, H).
+    start-up, J), L_M (magnetising inductance of the base model, H), L_sigma (leakage, H);
+    sample_time (s), duration (s) of the start-up record, pole_pairs, J (the base model's
+    inertia, kg m^2) and T_acc (N m, the mean torque that accelerates J to the final speed:
+    ``J w_end / t_90``, a scale for load torques, about 1-2 times a motor's rated torque).
     """
 
     w_e: float
@@ -41,11 +51,27 @@ class EffectContext:
     E_cu: float
     L_M: float
     L_sigma: float
+    sample_time: float = 0.0
+    duration: float = 0.0
+    pole_pairs: int = 1
+    J: float = 0.0
+    T_acc: float = 0.0
 
     @property
     def flux(self) -> float:
         """Rated magnetising flux V1 / w_e, Wb."""
         return self.V1 / self.w_e
+
+    @property
+    def torque_scale(self) -> float:
+        """A torque scale for load torques, N m: ``T_acc``, or (a context without it) a quarter
+        of ``1.5 p flux I_peak``."""
+        return self.T_acc if self.T_acc > 0 else 0.25 * 1.5 * self.pole_pairs * self.flux * self.I_peak
+
+    @property
+    def record_duration(self) -> float:
+        """Duration of the start-up record, s (1 s when the context does not say)."""
+        return self.duration if self.duration > 0 else 1.0
 
 
 class Effect:
@@ -53,12 +79,16 @@ class Effect:
 
     Attributes
     ----------
-    name : interface name (MODEL.md section 6).
+    name : interface name (``conf/effect/NAME.yaml``; part of the interface).
     problem : ``timedomain`` or ``admittance``.
     size_name, size_unit : the size parameter of the plant and its unit.
     realistic : documented realistic range of the size.
     extra_names : the augmentation's extra parameters.
     physics, shows_in : one line each, for reports.
+    measure_stage : order of the measurement transforms (sensor chain): 0 timing (channel
+        skew), 1 probe compression, 2 offsets, 3 speed sensor; row effects have none.
+    FORM_DRAWS : the effect's own random variation of its form (see :meth:`random_form`); a
+        YAML may override it with a ``form_draws`` entry.
     """
 
     name = "effect"
@@ -69,14 +99,18 @@ class Effect:
     extra_names: tuple[str, ...] = ()
     physics = ""
     shows_in = ""
+    measure_stage = 0
+    FORM_DRAWS: list | dict | None = None
 
-    def __init__(self, realistic=None, **form):
+    def __init__(self, realistic=None, form_draws=None, **form):
         if realistic is not None:
             lo, hi = (float(v) for v in realistic)
             if not lo < hi:
                 raise ConfigError(f"effect.{self.name}.realistic: low {lo} >= high {hi}")
             self.realistic = (lo, hi)
-        self.form = dict(form)
+        if form_draws is not None:
+            self.FORM_DRAWS = _plain(form_draws)
+        self.form = {k: _plain(v) for k, v in form.items()}
 
     # plant
     def plant(self, row: np.ndarray, size: float, ctx: EffectContext, form: dict | None = None) -> np.ndarray:
@@ -93,13 +127,101 @@ class Effect:
         return [lo + 0.25 * (hi - lo)]
 
     def augment(self, rows: np.ndarray, extras: np.ndarray, ctx: EffectContext) -> np.ndarray:
-        """Rows (n, N_EXT) of the augmented model for extra-parameter rows (n, k)."""
-        raise NotImplementedError
+        """Rows (n, N_EXT) of the augmented model for extra-parameter rows (n, k). Returns a
+        copy; it edits only this effect's own fields (so that effects combine)."""
+        return rows.copy()
+
+    def measure(self, sim: np.ndarray, extras: np.ndarray, ctx: EffectContext) -> np.ndarray:
+        """What the sensors record of simulated outputs ``sim`` (n, 3, N: i_alpha, i_beta,
+        speed per candidate) for extra-parameter rows (n, k). Identity unless a sensor effect."""
+        return sim
+
+    # plant (sensor side)
+    def plant_extras(self, size: float, ctx: EffectContext, form: dict | None = None) -> np.ndarray | None:
+        """Extra parameters (k,) with which the plant applies :meth:`measure` at ``size``
+        (None: the effect has no measurement side)."""
+        return None
+
+    def plant_measure(self, sim: np.ndarray, extras: np.ndarray, ctx: EffectContext,
+                      form: dict | None = None) -> np.ndarray:
+        """What the plant's sensors record of ``sim`` (n, 3, N) with the extras of
+        :meth:`plant_extras` (k,): :meth:`measure` unless the plant's form differs from the
+        augmentation's (e.g. a probe that clips hard)."""
+        return self.measure(sim, np.atleast_2d(extras), ctx)
+
+    def plant_voltages(self, v_a: np.ndarray, v_b: np.ndarray, size: float, ctx: EffectContext,
+                       form: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The recorded voltage channels given the voltages the motor sees (plant side)."""
+        return v_a, v_b
+
+    # screening and blind draws
+    def applies_to(self, facts: dict) -> str | None:
+        """None when the effect can occur in an experiment with these facts, else the reason it
+        is excluded. Facts: ``dc_link_voltage`` (V or None), ``input_hold`` (``zoh``/``linear``),
+        ``supply_frequency`` (Hz or None), ``has_speed``, ``has_stop`` (bool)."""
+        return None
+
+    def random_form(self, rng: np.random.Generator) -> dict:
+        """A random variation of the effect's form for blind draws (``{}``: the effect has one
+        form). :attr:`FORM_DRAWS` is a dict of options or a list of alternative dicts (one drawn
+        uniformly); an option is a constant, ``[lo, hi]`` (uniform), ``{choice: [...]}`` or
+        ``{log: [lo, hi]}`` (log-uniform)."""
+        spec = self.FORM_DRAWS
+        if not spec:
+            return {}
+        if isinstance(spec, list):
+            spec = spec[int(rng.integers(len(spec)))]
+        return {k: _draw_option(v, rng) for k, v in spec.items()}
+
+    def describe_fit(self, extras: np.ndarray, ctx: EffectContext, base: dict | None = None) -> dict:
+        """Fitted extra parameters in physical terms, for reports (name -> value); ``base``:
+        the fitted base parameters (``Rs, Ls, Le, Rr, J, fv, fc``) when the report has them."""
+        return {n: float(v) for n, v in zip(self.extra_names, np.ravel(extras), strict=False)}
 
     def describe(self) -> dict:
         return {"name": self.name, "size": self.size_name, "unit": self.size_unit,
                 "realistic": list(self.realistic), "extra_parameters": list(self.extra_names),
                 "physics": self.physics, "shows_in": self.shows_in}
+
+
+def _plain(v):
+    """OmegaConf containers (from Hydra) -> plain Python values."""
+    try:
+        from omegaconf import DictConfig, ListConfig, OmegaConf
+    except ImportError:  # pragma: no cover
+        return v
+    if isinstance(v, (DictConfig, ListConfig)):
+        return OmegaConf.to_container(v, resolve=True)
+    return v
+
+
+def _draw_option(v, rng: np.random.Generator):
+    if isinstance(v, dict) and "choice" in v:
+        ch = list(v["choice"])
+        return _plain_scalar(ch[int(rng.integers(len(ch)))])
+    if isinstance(v, dict) and "log" in v:
+        lo, hi = (float(x) for x in v["log"])
+        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    if isinstance(v, (list, tuple)) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                            for x in v):
+        return float(rng.uniform(float(v[0]), float(v[1])))
+    return v
+
+
+def _plain_scalar(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
+
+
+def facts_of(ds) -> dict:
+    """The experiment facts :meth:`Effect.applies_to` reads, from a time-domain data set."""
+    rec = ds.startups[0]
+    speed = getattr(rec, "speed", None)
+    return {"dc_link_voltage": getattr(ds, "dc_link_voltage", None), "input_hold": getattr(ds, "input_hold", None),
+            "supply_frequency": getattr(ds, "supply_frequency", None),
+            "has_speed": speed is not None and bool(np.any(np.isfinite(speed))),
+            "has_stop": bool(getattr(ds, "stops", None))}
 
 
 def load_effects(problem: str = "timedomain", names=None) -> dict[str, Effect]:
@@ -124,7 +246,7 @@ def load_effects(problem: str = "timedomain", names=None) -> dict[str, Effect]:
 
 
 def effect_context(t: np.ndarray, v_a: np.ndarray, v_b: np.ndarray, i_a: np.ndarray, i_b: np.ndarray,
-                   speed: np.ndarray, pole_pairs: int, J: float, L_M: float, L_sigma: float,
+                   speed: np.ndarray | None, pole_pairs: int, J: float, L_M: float, L_sigma: float,
                    dc_link_voltage: float | None = None) -> EffectContext:
     """Reference scales from a start-up record (and the base model's J, L_M, L_sigma).
 
@@ -139,9 +261,16 @@ def effect_context(t: np.ndarray, v_a: np.ndarray, v_b: np.ndarray, i_a: np.ndar
     V1 = float(abs(np.mean(v[tail] * np.exp(-1j * w_e * t[tail]))))
     dt = float(t[1] - t[0])
     E_in = float(np.sum(1.5 * (v_a * i_a + v_b * i_b)) * dt)
-    E_kin = 0.5 * J * float(np.mean(speed[tail])) ** 2
+    if speed is None or not np.any(np.isfinite(speed)):
+        speed = np.full(n, w_e / pole_pairs)  # no speed sensor: assume the start reached synchronism
+    w_end = float(np.mean(speed[tail]))
+    E_kin = 0.5 * J * w_end**2
+    fast = np.flatnonzero(speed >= 0.9 * w_end)
+    t90 = float(t[fast[0]] - t[0]) if len(fast) and fast[0] > 0 else float(t[-1] - t[0])
     return EffectContext(
         w_e=w_e, V1=V1, I_peak=float(np.max(np.hypot(i_a, i_b))), w_sync=w_e / pole_pairs,
         dc_link_voltage=float(dc_link_voltage) if dc_link_voltage else float(np.pi * V1 / 2.0),
         E_cu=max(E_in - E_kin, 1e-9), L_M=float(L_M), L_sigma=float(L_sigma),
+        sample_time=dt, duration=float(t[-1] - t[0]), pole_pairs=int(pole_pairs), J=float(J),
+        T_acc=float(J * 0.9 * max(w_end, 1e-9) / max(t90, dt)),
     )

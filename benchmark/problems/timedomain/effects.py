@@ -3,7 +3,20 @@
 Sizes are in the units each class documents; ``realistic`` ranges are the defaults of the
 YAMLs in ``conf/effect/``. ``form`` options vary how the plant realises an effect (exponent of
 a saturation curve, hard or smooth inverter drop, a double cage or a three-section deep-bar
-ladder...), so that a diagnosis tuned to one form is checked on others.
+ladder...), so that a diagnosis tuned to one form is checked on others; each class draws its
+own random variation of form for blind tests (``FORM_DRAWS``, :meth:`Effect.random_form`).
+
+The augmentations are meant to fit the physics whatever the maker's formula (checked against
+the independent plant, ``synthetic/independent``): the magnetising curve is a monotone sum of
+two power laws (a soft quadratic knee plus a sharper term of free exponent: it follows Frohlich,
+arctan and tabulated curves), the rotor impedance varies with rotor frequency through a second
+branch while the low-slip resistance and leakage stay the base model's (two cages or a deep-bar
+ladder), the iron-loss conductance sits anywhere between the stator EMF and the rotor flux node,
+and the leakage saturates towards a linear floor (reported as an inductance-current curve by
+:meth:`LeakageSaturation.leakage_curve`).
+
+The bench effects (sensors, shaft, load) live in
+:mod:`benchmark.problems.timedomain.bench_effects` and are re-exported here.
 """
 
 from __future__ import annotations
@@ -56,6 +69,7 @@ class DoubleCage(Effect):
     size_name = "resistance_rise"
     realistic = (0.3, 1.5)
     extra_names = ("dc_rise", "dc_tau")
+    FORM_DRAWS = {"ladder": {"choice": [False, True]}, "tau2": [0.002, 0.008]}
     physics = "second rotor cage / deep bars: rotor resistance and leakage depend on rotor frequency"
     shows_in = "early start-up (high slip): speed and current envelope"
 
@@ -84,19 +98,39 @@ class DoubleCage(Effect):
         return [np.array([0.5, 0.003]), np.array([1.5, 0.001])]
 
     def augment(self, rows, extras, ctx):
+        """Cage 1 ``(1 + a) R_R``, cage 2 ``(1 + a)/a R_R`` with leakage ``tau R_2``: the rotor
+        resistance rises from ``R_R`` (low slip) towards ``(1 + a) R_R`` at high rotor frequency.
+        The low-slip leakage, ``L_sigma + L_2 (a/(1 + a))^2``, is kept at the base model's
+        ``L_sigma`` (the common leakage is reduced by cage 2's share), so that the base
+        parameters keep their low-slip meaning; rows where that is impossible are invalid."""
         rows = rows.copy()
         a, tau2 = extras[:, 0], extras[:, 1]
         R_R = rows[:, IDX["R_r1"]].copy()
         rows[:, IDX["R_r1"]] = (1 + a) * R_R
         rows[:, IDX["R_r2"]] = (1 + a) / a * R_R
         rows[:, IDX["L_sigma2"]] = tau2 * rows[:, IDX["R_r2"]]
+        share = a / (1 + a)
+        L_common = rows[:, IDX["L_sigma"]] - rows[:, IDX["L_sigma2"]] * share**2
+        rows[:, IDX["L_sigma"]] = np.where(L_common > 0, L_common, np.nan)
         return rows
+
+    def describe_fit(self, extras, ctx, base=None):
+        a, tau2 = (float(v) for v in np.ravel(extras)[:2])
+        return {"resistance_rise": a, "cage2_time_constant_s": tau2,
+                "R_ratio_at_supply_frequency": float(self.resistance_ratio(a, tau2, ctx.w_e))}
+
+    @staticmethod
+    def resistance_ratio(a: float, tau2: float, w: float) -> float:
+        """Rotor resistance at rotor angular frequency ``w`` over its low-slip value."""
+        z = 1.0 / (1.0 / (1 + a) + 1.0 / ((1 + a) / a * (1 + 1j * w * tau2)))
+        return float(z.real)
 
 
 class _Saturation(Effect):
     """A saturating branch: ``i = psi/L (1 + k (|psi|/psi_ref)^n)`` on the extended-model
     fields ``{prefix}_k``, ``{prefix}_psi``, ``{prefix}_exp``. Size ``k``; form ``exponent`` n;
-    the augmentation fits ``k`` and ``n`` with the reference flux from the base fit."""
+    the augmentation fits ``k`` and ``n`` (and, in subclasses, a third shape parameter) with the
+    reference flux from the base fit."""
 
     prefix = ""
     default_exponent = 2.0
@@ -134,24 +168,62 @@ class _Saturation(Effect):
 class MainSaturation(_Saturation):
     """Magnetising inductance falls with flux: ``i_M = psi_M/L_M (1 + k (|psi_M|/psi_rated)^n)``.
 
-    Size ``k``: extra magnetising current at rated flux (fraction); form ``exponent`` n."""
+    Size ``k``: extra magnetising current at rated flux (fraction); form ``exponent`` n.
+
+    Augmentation: a flexible monotone curve, ``i_M = psi_M/L_M (1 + k x^n + k2 x^2)`` with
+    ``x = |psi_M|/psi_rated`` and non-negative ``k, k2`` (a soft quadratic knee plus a sharper
+    term of free exponent ``n`` in 3-16: Frohlich, arctan and tabulated B-H curves fit it over
+    the fluxes a start-up reaches); ``L_M`` stays the unsaturated value. The saturating branch
+    sits at the magnetising node of a T circuit whose leakage splits ``Llr = ms_split Lls``
+    (the extended model's T mode): where the iron saturates in a real machine, between the
+    stator and rotor leakages, which the inverse-Gamma node cannot represent once ``Lm``
+    varies (on the independent plant the inverse-Gamma node left a third of the gap)."""
 
     name = "main_saturation"
     size_name = "extra_magnetising_current"
     realistic = (0.1, 0.6)
-    extra_names = ("ms_k", "ms_exp")
+    extra_names = ("ms_k", "ms_exp", "ms_k2", "ms_split")
     physics = "magnetising inductance falls with flux magnitude"
     shows_in = "steady-state / no-load current amplitude, low-order harmonics"
     prefix = "ms"
     default_exponent = 4.0
-    max_exponent = 10.0
-    exponent_starts = (4.0, 2.0)
+    FORM_DRAWS = {"exponent": {"choice": [2.0, 4.0, 6.0]}}
 
     def plant_reference(self, row, ctx):
         return ctx.flux
 
     def model_reference(self, ctx):
         return ctx.flux
+
+    def extra_bounds(self, ctx):
+        return np.array([0.0, 1.0, 0.0, 0.05]), np.array([3.0, 16.0, 2.0, 3.0])
+
+    def extra_starts(self, ctx):
+        return [np.array([0.1, 6.0, 0.05, 1.0]), np.array([0.2, 10.0, 0.0, 1.0]), np.array([0.02, 4.0, 0.15, 1.0]),
+                np.array([0.15, 1.0, 0.0, 1.0]), np.array([0.1, 6.0, 0.05, 0.2])]
+
+    def augment(self, rows, extras, ctx):
+        rows = rows.copy()
+        rows[:, IDX["ms_k"]] = extras[:, 0]
+        rows[:, IDX["ms_exp"]] = extras[:, 1]
+        rows[:, IDX["ms_k2"]] = extras[:, 2]
+        rows[:, IDX["ms_exp2"]] = 2.0
+        rows[:, IDX["ms_psi"]] = self.model_reference(ctx)
+        rows[:, IDX["t_split"]] = extras[:, 3]
+        return rows
+
+    def magnetising_curve(self, extras, flux, ctx, L_M=None):
+        """Magnetising current (A) at flux linkages ``flux`` (Wb) of the fitted curve."""
+        k, n, k2 = (float(v) for v in np.ravel(extras)[:3])
+        L_M = ctx.L_M if L_M is None else float(L_M)
+        x = np.abs(np.asarray(flux, float)) / ctx.flux
+        return np.asarray(flux, float) / L_M * (1.0 + k * x**n + k2 * x**2)
+
+    def describe_fit(self, extras, ctx, base=None):
+        k, n, k2 = (float(v) for v in np.ravel(extras)[:3])
+        drop = {f"L_M_secant_over_unsaturated_at_{int(f * 100)}pct_flux": float(1.0 / (1.0 + k * f**n + k2 * f**2))
+                for f in (0.5, 0.8, 1.0, 1.1)}
+        return {"ms_k": k, "ms_exp": n, "ms_k2": k2, "ms_split": float(np.ravel(extras)[3]), **drop}
 
 
 class IronLoss(Effect):
@@ -163,24 +235,37 @@ class IronLoss(Effect):
     name = "iron_loss"
     size_name = "R_fe_over_X_M"
     realistic = (20.0, 100.0)
-    extra_names = ("g_fe_pu",)
+    extra_names = ("g_fe_pu", "fe_position")
+    FORM_DRAWS = {"position": [0.0, 1.0]}
     physics = "core-loss resistance across the magnetising branch"
     shows_in = "in-phase no-load current"
 
     def plant(self, row, size, ctx, form=None):
+        """Form ``position`` (0-1): where the loss resistance sits, 0 across the rotor flux node
+        (the default), 1 across the stator EMF, between: shared."""
+        form = {**self.form, **(form or {})}
+        pos = float(form.get("position", 0.0))
         row = row.copy()
-        row[IDX["g_fe"]] = 1.0 / (size * ctx.w_e * row[IDX["L_M"]])
+        g = 1.0 / (size * ctx.w_e * row[IDX["L_M"]])
+        row[IDX["g_fe"]] = (1.0 - pos) * g
+        row[IDX["g_fe_s"]] = pos * g
         return row
 
     def extra_bounds(self, ctx):
-        return np.array([0.0]), np.array([0.2])
+        return np.array([0.0, 0.0]), np.array([0.2, 1.0])
 
     def extra_starts(self, ctx):
-        return [np.array([0.02])]
+        return [np.array([0.02, 0.5]), np.array([0.02, 0.0]), np.array([0.02, 1.0])]
 
     def augment(self, rows, extras, ctx):
+        """Conductance ``g_fe_pu/(w_e L_M)``, a share ``fe_position`` of it across the stator
+        EMF and the rest across the rotor flux node: a loss resistance anywhere along the
+        leakage (a T circuit's magnetising node, an iron-loss winding, the terminals)."""
         rows = rows.copy()
-        rows[:, IDX["g_fe"]] = extras[:, 0] / (ctx.w_e * rows[:, IDX["L_M"]])
+        g = extras[:, 0] / (ctx.w_e * rows[:, IDX["L_M"]])
+        pos = extras[:, 1]
+        rows[:, IDX["g_fe"]] = (1.0 - pos) * g
+        rows[:, IDX["g_fe_s"]] = pos * g
         return rows
 
 
@@ -223,24 +308,89 @@ class LeakageSaturation(_Saturation):
     ``i_s = dpsi/L_sigma (1 + k (|dpsi|/(L_sigma I_peak))^n)``.
 
     Size ``k``: extra current at the start-up peak's leakage flux (fraction); form
-    ``exponent`` n."""
+    ``exponent`` n, ``floor`` (share of the leakage that does not saturate, default 0).
+
+    Augmentation: ``i_s = dpsi/(L_sigma l(x))``, ``l = f + (1 - f)/(1 + k x^n)``, ``x =
+    |dpsi|/(L_sigma I_peak)``: the leakage falls from ``L_sigma`` (small currents: the
+    unsaturated value) towards the linear floor ``f L_sigma`` (slot body, end windings).
+    :meth:`leakage_curve` gives the leakage inductance as a function of current."""
 
     name = "leakage_saturation"
     size_name = "extra_current_at_peak"
     realistic = (0.1, 0.5)
-    extra_names = ("ls_k", "ls_exp")
+    extra_names = ("ls_k", "ls_exp", "ls_floor")
     physics = "leakage inductance falls at high current"
     shows_in = "start-up current peaks"
     prefix = "ls"
     default_exponent = 2.0
-    max_exponent = 8.0
-    exponent_starts = (2.0, 4.0)
+    FORM_DRAWS = {"exponent": {"choice": [1.5, 2.0, 3.0]}, "floor": {"choice": [0.0, 0.0, 0.3]}}
 
     def plant_reference(self, row, ctx):
         return row[IDX["L_sigma"]] * ctx.I_peak  # the plant's own leakage
 
     def model_reference(self, ctx):
         return ctx.L_sigma * ctx.I_peak  # the base fit's leakage
+
+    def plant(self, row, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        row = super().plant(row, size, ctx, form)
+        row[IDX["ls_floor"]] = float(form.get("floor", 0.0))
+        return row
+
+    def extra_bounds(self, ctx):
+        return np.array([0.0, 1.0, 0.0]), np.array([20.0, 8.0, 0.9])
+
+    def extra_starts(self, ctx):
+        return [np.array([0.3, 2.0, 0.0]), np.array([2.0, 2.0, 0.3]), np.array([2.0, 4.0, 0.4])]
+
+    def augment(self, rows, extras, ctx):
+        rows = super().augment(rows, extras, ctx)
+        rows[:, IDX["ls_floor"]] = extras[:, 2]
+        return rows
+
+    def leakage_curve(self, extras, currents, ctx, L_sigma: float | None = None) -> np.ndarray:
+        """Secant leakage inductance (H) at stator current amplitudes ``currents`` (A) for the
+        fitted extras; ``L_sigma``: the fitted unsaturated leakage (default: the base fit's)."""
+        k, n, fl = (float(v) for v in np.ravel(extras)[:3])
+        L0 = ctx.L_sigma if L_sigma is None else float(L_sigma)
+        ref = ctx.L_sigma * ctx.I_peak
+        i = np.abs(np.asarray(currents, float))
+
+        def ell(x):
+            return fl + (1.0 - fl) / (1.0 + k * x**n)
+
+        # current(flux) = flux/(L0 ell(flux/ref)) is increasing: bisection on the flux
+        lo = np.zeros_like(i)
+        hi = np.maximum(L0 * i, 1e-30)
+        while True:  # widen until the current at hi exceeds i
+            short = hi / (L0 * ell(hi / ref)) < i
+            if not np.any(short):
+                break
+            hi = np.where(short, 2.0 * hi, hi)
+        hi = hi / max(fl, 1e-6) if fl > 0 else hi
+        hi = np.maximum(hi, L0 * i)
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            above = mid / (L0 * ell(mid / ref)) > i
+            hi = np.where(above, mid, hi)
+            lo = np.where(above, lo, mid)
+        flux = 0.5 * (lo + hi)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(i > 0, flux / np.where(i > 0, i, 1.0), L0)
+
+    def describe_fit(self, extras, ctx, base=None):
+        """The fitted leakage at currents scaled to the record: 15 %, 50 % and 100 % of the
+        start-up peak (like L(13 A), L(90 A) of a 90 A start), and the floor."""
+        L0 = None if not base else base.get("Le")
+        fr = (0.15, 0.5, 1.0)
+        cur = [f * ctx.I_peak for f in fr]
+        L = self.leakage_curve(extras, cur, ctx, L0)
+        out = {"ls_k": float(np.ravel(extras)[0]), "ls_exp": float(np.ravel(extras)[1]),
+               "ls_floor": float(np.ravel(extras)[2])}
+        for c, v in zip(cur, L, strict=True):
+            out[f"L_sigma_at_{c:.3g}A"] = float(v)
+        out["L_sigma_ratio_peak_over_15pct"] = float(L[-1] / L[0])
+        return out
 
 
 class InverterDrop(Effect):
@@ -256,6 +406,12 @@ class InverterDrop(Effect):
     extra_names = ("U_d_pu",)
     physics = "switch voltage drop and dead time oppose the current sign"
     shows_in = "current-zero-crossing distortion, 6k +/- 1 harmonics"
+    FORM_DRAWS = {"smooth": {"choice": [0.0, 0.02, 0.05]}}
+
+    def applies_to(self, facts):
+        if facts.get("dc_link_voltage") or str(facts.get("input_hold") or "") == "zoh":
+            return None
+        return "no inverter: neither a DC-link voltage nor inverter-held (zoh) voltages in the record"
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
@@ -275,3 +431,17 @@ class InverterDrop(Effect):
         rows[:, IDX["U_d"]] = extras[:, 0] * ctx.dc_link_voltage
         rows[:, IDX["i_0"]] = 0.01 * ctx.I_peak
         return rows
+
+
+from benchmark.problems.timedomain.bench_effects import (  # noqa: E402  (re-exported)
+    ChannelDelay,
+    CurrentSensorSaturation,
+    LoadTorque,
+    SensorOffset,
+    SpeedSensorGain,
+    TwoMass,
+)
+
+__all__ = ["ChannelDelay", "CoulombFriction", "CurrentSensorSaturation", "DoubleCage", "InverterDrop", "IronLoss",
+           "LeakageSaturation", "LoadTorque", "MainSaturation", "SensorOffset", "SpeedSensorGain", "TemperatureDrift",
+           "TwoMass"]

@@ -1,14 +1,15 @@
 """The extended induction-motor model: the base model plus the unmodelled effects.
 
 It is the physics behind both the synthetic plant that makes "real" data with an effect and
-the augmented identification models of the sim-to-real diagnosis (MODEL.md section 6). With
+the augmented identification models of the sim-to-real diagnosis. With
 every effect term at its neutral value it is the base model of :mod:`benchmark.problems.timedomain.motor`
 written in the inverse-Gamma form (``L_sigma = Le``, ``L_M = Ls - Le``,
 ``R_R = Rr (Ls - Le)/Ls``), so the two agree to rounding (tested).
 
 States (stator frame, amplitude-invariant, SI): stator flux ``psi_s`` (2), magnetising flux
 ``psi_M`` (2), flux of the second rotor branch ``psi_2`` (2), electrical speed ``w``, winding
-temperature rise ``theta`` (K).
+temperature rise ``theta`` (K), load-side speed ``w_l`` (mechanical rad/s) and coupling
+twist (rad) of a two-mass shaft.
 
 Branches on the magnetising node (KCL ``i_M(psi_M) = i_s + i_1 + i_2 + i_fe``):
 
@@ -26,6 +27,36 @@ with stiction). Resistances follow the copper law ``R (1 + alpha theta)``, with 
 temperature rise driven by the copper losses: ``d theta/dt = h_th * P_cu`` (``h_th`` = 1/heat
 capacity, K/J). Inverter drop: each phase loses ``U_d tanh(i_x/i_0)`` (``i_0 = 0``: a hard
 sign), transformed to alpha-beta.
+
+Bench effects (appended fields, all neutral at zero):
+
+* voltage-channel offsets ``v_off_a, v_off_b`` (V): the recorded voltage carries a DC offset,
+  so the motor sees ``v - v_off``;
+* magnetising curve: a second power term, ``i_M = psi_M/L_M (1 + ms_k x^ms_exp + ms_k2
+  x^ms_exp2)`` with ``x = |psi_M|/ms_psi`` (non-negative weights: a monotone curve);
+* T mode (``t_split > 0``, with main saturation): the saturating magnetising branch sits at the
+  node of a T circuit whose leakage splits ``Llr = t_split Lls``, the unsaturated T circuit
+  being the row's inverse-Gamma one (``Lls + Lm = L_sigma + L_M``, ``L_M = Lm^2/(Lm + Llr)``,
+  ``R_R = Rr (Lm/(Lm + Llr))^2``). A saturating T circuit has no constant-parameter
+  inverse-Gamma equivalent: the currents now split at that node (solved per evaluation:
+  ``|psi_m| (1/Lls + 1/Llr + s(|psi_m|)/Lm) = |psi_s/Lls + psi_r/Llr|``, Newton). States keep
+  their inverse-Gamma scaling (``psi_M = psi_r Lm/(Lm + Llr)``); leakage saturation and the
+  rotor-node iron loss ``g_fe`` are not modelled in T mode (the stator-side ``g_fe_s`` is);
+* load torques (N m, summed): ``T_L`` constant and passive (it opposes motion like Coulomb
+  friction and holds a shaft at rest), ``T_q (w/w_ref)|w/w_ref|`` (fan, pump; ``w_ref``
+  mechanical rad/s), ``T_s`` passive and switched on at ``t_step`` (s) over a smooth
+  ``0.5 (1 + tanh((t - t_step)/t_rise))`` (``t_rise = 0``: a hard step); they act on the load
+  side of a two-mass shaft, else on the single mass;
+* two-mass shaft (``J_l > 0``): the motor's own inertia is ``J``, the load's ``J_l``, coupled by
+  ``T_sh = k_sh twist + c_sh (w_m - w_l)``; friction ``fv``, ``fc`` on the motor shaft, the speed
+  output is the load side's (states ``w_l`` mechanical rad/s, ``twist`` rad);
+* leakage saturation with a linear part: ``i_s = dpsi/(L_sigma l(x))``,
+  ``l = ls_floor + (1 - ls_floor)/(1 + ls_k x^ls_exp)`` (``ls_floor = 0``: the form above);
+* iron loss across the stator EMF ``e_s = d psi_s/dt`` (``g_fe_s``, S), the other end of the
+  leakage from ``g_fe``: the terminal current is ``i_s + g_fe_s e_s`` with
+  ``e_s = (v - Rs i_s)/(1 + Rs g_fe_s)`` (algebraic, no new state; with a held input a sample
+  closes the previous interval, so it sees the previous sample's voltage). A loss resistance that sits
+  between the two (a T circuit's magnetising node) is a blend of both.
 """
 
 from __future__ import annotations
@@ -35,94 +66,17 @@ import math
 import numba
 import numpy as np
 
-from benchmark.core.constants import COPPER_INFERRED_ZERO_C
-from benchmark.problems.timedomain.motor import InductionMotor
-
-#: Fields of an extended parameter row, in order. Neutral values make the base model.
-EXTENDED_FIELDS = (
-    "Rs",  # ohm, stator resistance
-    "L_sigma",  # H, leakage inductance (= Le)
-    "L_M",  # H, magnetising inductance of the inverse-Gamma model (= Ls - Le)
-    "R_r1",  # ohm, rotor cage 1 (inverse-Gamma referred)
-    "R_r2",  # ohm, rotor cage 2; 0 = absent
-    "L_sigma2",  # H, leakage of cage 2
-    "g_fe",  # S, iron-loss conductance on the magnetising node; 0 = none
-    "ms_k",  # -, main saturation: extra magnetising current at ms_psi (fraction)
-    "ms_psi",  # Wb, main saturation reference flux
-    "ms_exp",  # -, main saturation exponent
-    "ls_k",  # -, leakage saturation: extra stator current at ls_psi (fraction)
-    "ls_psi",  # Wb, leakage saturation reference flux linkage
-    "ls_exp",  # -, leakage saturation exponent
-    "U_d",  # V, inverter voltage drop per phase
-    "i_0",  # A, current scale of the drop's sign change (0: hard sign)
-    "h_th",  # K/J, temperature rise per joule of copper loss; 0 = constant temperature
-    "alpha_th",  # 1/K, copper temperature coefficient 1/(234.5 + theta_ref)
-    "J",  # kg m^2
-    "fv",  # N m s
-    "fc",  # N m
-    "p",  # pole pairs
+from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the row API lives there)
+    EXTENDED_FIELDS,
+    IDX,
+    N_EXT,
+    base_row,
+    base_rows,
+    valid_rows,
 )
-N_EXT = len(EXTENDED_FIELDS)
-IDX = {name: k for k, name in enumerate(EXTENDED_FIELDS)}
-N_STATES = 8
+
+N_STATES = 10
 SQRT3_2 = math.sqrt(3.0) / 2.0
-
-
-def base_row(motor: InductionMotor | dict) -> np.ndarray:
-    """Extended parameter row of a base-model parameter set (every effect neutral)."""
-    m = motor if isinstance(motor, dict) else motor.as_dict()
-    row = np.zeros(N_EXT)
-    Ls, Le = m["Ls"], m["Le"]
-    row[IDX["Rs"]] = m["Rs"]
-    row[IDX["L_sigma"]] = Le
-    row[IDX["L_M"]] = Ls - Le
-    row[IDX["R_r1"]] = m["Rr"] * (Ls - Le) / Ls
-    row[IDX["ms_psi"]] = 1.0
-    row[IDX["ms_exp"]] = 2.0
-    row[IDX["ls_psi"]] = 1.0
-    row[IDX["ls_exp"]] = 2.0
-    row[IDX["alpha_th"]] = 1.0 / (COPPER_INFERRED_ZERO_C + 20.0)
-    row[IDX["J"]] = m["J"]
-    row[IDX["fv"]] = m["fv"]
-    row[IDX["fc"]] = m["fc"]
-    row[IDX["p"]] = m.get("p", 1)
-    return row
-
-
-def base_rows(theta: np.ndarray, p: int) -> np.ndarray:
-    """Vectorised :func:`base_row` for physical parameter rows (n, 7) in PARAMETER_NAMES order."""
-    theta = np.atleast_2d(theta)
-    Rs, Ls, Le, Rr, J, fv, fc = theta.T
-    rows = np.zeros((len(theta), N_EXT))
-    rows[:, IDX["Rs"]] = Rs
-    rows[:, IDX["L_sigma"]] = Le
-    rows[:, IDX["L_M"]] = Ls - Le
-    with np.errstate(all="ignore"):
-        rows[:, IDX["R_r1"]] = Rr * (Ls - Le) / Ls
-    rows[:, IDX["ms_psi"]] = 1.0
-    rows[:, IDX["ms_exp"]] = 2.0
-    rows[:, IDX["ls_psi"]] = 1.0
-    rows[:, IDX["ls_exp"]] = 2.0
-    rows[:, IDX["alpha_th"]] = 1.0 / (COPPER_INFERRED_ZERO_C + 20.0)
-    rows[:, IDX["J"]] = J
-    rows[:, IDX["fv"]] = fv
-    rows[:, IDX["fc"]] = fc
-    rows[:, IDX["p"]] = p
-    bad = ~((Le > 0) & (Ls > Le) & (Rs > 0) & (Rr > 0) & (J > 0) & (fv >= 0) & (fc >= 0))
-    rows[bad] = np.nan
-    return rows
-
-
-def valid_rows(rows: np.ndarray) -> np.ndarray:
-    """Mask of physically valid extended rows."""
-    r = rows
-    ok = np.all(np.isfinite(r), axis=1)
-    for name in ("Rs", "L_sigma", "L_M", "R_r1", "J", "ms_psi", "ls_psi"):
-        ok &= r[:, IDX[name]] > 0
-    for name in ("R_r2", "g_fe", "ms_k", "ls_k", "U_d", "i_0", "h_th", "fv", "fc"):
-        ok &= r[:, IDX[name]] >= 0
-    ok &= (r[:, IDX["R_r2"]] == 0) | (r[:, IDX["L_sigma2"]] > 0)
-    return ok
 
 
 @numba.njit(cache=True, inline="always")
@@ -130,6 +84,16 @@ def _sat(x, k, ref, ex):
     if k == 0.0:
         return 1.0
     return 1.0 + k * (x / ref) ** ex
+
+
+@numba.njit(cache=True, inline="always")
+def _leak_gain(c, dmag):
+    """Stator current over (leakage flux / L_sigma): 1 unless the leakage saturates."""
+    sat = _sat(dmag, c[10], c[11], c[12])
+    fl = c[35]
+    if fl > 0.0:
+        return 1.0 / (fl + (1.0 - fl) / sat)
+    return sat
 
 
 @numba.njit(cache=True, inline="always")
@@ -143,19 +107,93 @@ def _drop_sign(i, i0):
     return 0.0
 
 
+@numba.njit(cache=True, inline="always")
+def _loads(c, t, w_mech):
+    """(passive Coulomb-like load torque, speed-dependent load torque) at time t, N m."""
+    t_pass = c[25]
+    t_dyn = 0.0
+    if c[26] != 0.0:
+        q = w_mech / c[27]
+        t_dyn = c[26] * q * abs(q)
+    T_s = c[28]
+    if T_s != 0.0:
+        tr = c[30]
+        if tr > 0.0:
+            t_pass += T_s * 0.5 * (1.0 + math.tanh((t - c[29]) / tr))
+        elif t >= c[29]:
+            t_pass += T_s
+    return t_pass, t_dyn
+
+
+@numba.njit(cache=True, inline="always")
+def _resist(direction, drive, tc):
+    """Coulomb torque: against the motion, or at standstill the drive clipped to +-tc."""
+    if direction != 0.0:
+        return tc * direction
+    if drive > tc:
+        return tc
+    if drive < -tc:
+        return -tc
+    return drive
+
+
 @numba.njit(cache=True)
-def _derivative(c, x, v_a, v_b, direction, out):
+def _t_solve(c, x):
+    """T mode: stator and total rotor currents (T units, A) and the referral ``Lm/(Lm + Llr)``."""
+    L_sig, LM, k = c[1], c[2], c[36]
+    ms_k, ms_psi, ms_exp, k2, e2 = c[7], c[8], c[9], c[23], c[24]
+    Ls_tot = L_sig + LM
+    a = (1.0 - k) * LM
+    Lm = 0.5 * (a + math.sqrt(a * a + 4.0 * k * Ls_tot * LM))
+    Lls = Ls_tot - Lm
+    Llr = k * Lls
+    g0 = Lm / (Lm + Llr)
+    pr_a = x[2] / g0
+    pr_b = x[3] / g0
+    A_a = x[0] / Lls + pr_a / Llr
+    A_b = x[1] / Lls + pr_b / Llr
+    A = math.sqrt(A_a * A_a + A_b * A_b)
+    c0 = 1.0 / Lls + 1.0 / Llr
+    m = A / (c0 + 1.0 / Lm)  # the unsaturated solution: an upper bound (s >= 1)
+    for _ in range(30):
+        u = m / ms_psi
+        sat = 1.0
+        dsat = 0.0
+        if ms_k != 0.0:
+            sat += ms_k * u**ms_exp
+            dsat += ms_k * ms_exp * u ** (ms_exp - 1.0) / ms_psi
+        if k2 != 0.0:
+            sat += k2 * u**e2
+            dsat += k2 * e2 * u ** (e2 - 1.0) / ms_psi
+        f = m * (c0 + sat / Lm) - A
+        step = f / (c0 + (sat + m * dsat) / Lm)
+        m -= step
+        if abs(step) <= 1e-13 * (m + 1e-300):
+            break
+    if A > 0.0:
+        pm_a = A_a * m / A
+        pm_b = A_b * m / A
+    else:
+        pm_a = 0.0
+        pm_b = 0.0
+    return (x[0] - pm_a) / Lls, (x[1] - pm_b) / Lls, (pr_a - pm_a) / Llr, (pr_b - pm_b) / Llr, g0
+
+
+@numba.njit(cache=True)
+def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
-    gfe, ms_k, ms_psi, ms_exp, ls_k, ls_psi, ls_exp = c[6], c[7], c[8], c[9], c[10], c[11], c[12]
+    gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
     Ud, i0, h_th, alpha, J, fv, fc, p = c[13], c[14], c[15], c[16], c[17], c[18], c[19], c[20]
     ps_a, ps_b, pm_a, pm_b, p2_a, p2_b, w, th = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+    v_a = v_a - c[21]
+    v_b = v_b - c[22]
     heat = 1.0 + alpha * th
     Rs_t = Rs * heat
     R_r1_t = R_r1 * heat
     R_r2_t = R_r2 * heat
     d_a = ps_a - pm_a
     d_b = ps_b - pm_b
-    g = _sat(math.sqrt(d_a * d_a + d_b * d_b), ls_k, ls_psi, ls_exp) / Ls_
+    g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_
     is_a = d_a * g
     is_b = d_b * g
     if R_r2 > 0.0:
@@ -164,12 +202,28 @@ def _derivative(c, x, v_a, v_b, direction, out):
     else:
         i2_a = 0.0
         i2_b = 0.0
-    gm = _sat(math.sqrt(pm_a * pm_a + pm_b * pm_b), ms_k, ms_psi, ms_exp) / LM
-    im_a = pm_a * gm
-    im_b = pm_b * gm
-    inv_g = 1.0 / (1.0 / R_r1_t + gfe)
-    e_a = (is_a + i2_a - w * pm_b / R_r1_t - im_a) * inv_g
-    e_b = (is_b + i2_b + w * pm_a / R_r1_t - im_b) * inv_g
+    tmode = c[36] > 0.0 and (ms_k != 0.0 or c[23] != 0.0)
+    if tmode:
+        is_a, is_b, ir_a, ir_b, g0 = _t_solve(c, x)
+        if R_r2 > 0.0:  # cage 2 on the rotor node, in T units
+            i2_a = g0 * (p2_a - pm_a) / Ls2
+            i2_b = g0 * (p2_b - pm_b) / Ls2
+        e_a = -(R_r1_t / g0) * (ir_a - i2_a) - w * pm_b
+        e_b = -(R_r1_t / g0) * (ir_b - i2_b) + w * pm_a
+        if R_r2 > 0.0:  # back to inverse-Gamma units for the cage-2 equation below
+            i2_a = i2_a / g0
+            i2_b = i2_b / g0
+    else:
+        pm = math.sqrt(pm_a * pm_a + pm_b * pm_b)
+        sm = _sat(pm, ms_k, ms_psi, ms_exp)
+        if c[23] != 0.0:
+            sm += c[23] * (pm / ms_psi) ** c[24]
+        gm = sm / LM
+        im_a = pm_a * gm
+        im_b = pm_b * gm
+        inv_g = 1.0 / (1.0 / R_r1_t + gfe)
+        e_a = (is_a + i2_a - w * pm_b / R_r1_t - im_a) * inv_g
+        e_b = (is_b + i2_b + w * pm_a / R_r1_t - im_b) * inv_g
     # inverter drop: per phase, then amplitude-invariant Clarke
     if Ud > 0.0:
         i_r = is_a
@@ -180,8 +234,13 @@ def _derivative(c, x, v_a, v_b, direction, out):
         s_t = _drop_sign(i_t, i0)
         v_a = v_a - Ud * (2.0 / 3.0) * (s_r - 0.5 * (s_s + s_t))
         v_b = v_b - Ud * (s_s - s_t) / (2.0 * SQRT3_2)
-    out[0] = v_a - Rs_t * is_a
-    out[1] = v_b - Rs_t * is_b
+    gs = c[34]
+    if gs > 0.0:
+        out[0] = (v_a - Rs_t * is_a) / (1.0 + Rs_t * gs)
+        out[1] = (v_b - Rs_t * is_b) / (1.0 + Rs_t * gs)
+    else:
+        out[0] = v_a - Rs_t * is_a
+        out[1] = v_b - Rs_t * is_b
     out[2] = e_a
     out[3] = e_b
     if R_r2 > 0.0:
@@ -191,14 +250,32 @@ def _derivative(c, x, v_a, v_b, direction, out):
         out[4] = 0.0
         out[5] = 0.0
     t_m = 1.5 * p * (ps_a * is_b - ps_b * is_a)
-    if direction != 0.0:
-        out[6] = -w * fv / J + p / J * (t_m - fc * direction)
-    elif t_m > fc:
-        out[6] = -w * fv / J + p / J * (t_m - fc)
-    elif t_m < -fc:
-        out[6] = -w * fv / J + p / J * (t_m + fc)
+    J_l = c[31]
+    if J_l > 0.0:
+        # two-mass shaft: friction on the motor side, the load on the load side
+        wm = w / p
+        wl = x[8]
+        t_sh = c[32] * x[9] + c[33] * (wm - wl)
+        drive_m = t_m - t_sh - fv * wm
+        out[6] = p / J * (drive_m - _resist(direction, drive_m, fc))
+        t_pass, t_dyn = _loads(c, t, wl)
+        drive_l = t_sh - t_dyn
+        out[8] = (drive_l - _resist(dir_l, drive_l, t_pass)) / J_l
+        out[9] = wm - wl
     else:
-        out[6] = 0.0
+        t_pass, t_dyn = _loads(c, t, w / p)
+        fct = fc + t_pass
+        t_d = t_m - t_dyn
+        if direction != 0.0:
+            out[6] = -w * fv / J + p / J * (t_d - fct * direction)
+        elif t_d > fct:
+            out[6] = -w * fv / J + p / J * (t_d - fct)
+        elif t_d < -fct:
+            out[6] = -w * fv / J + p / J * (t_d + fct)
+        else:
+            out[6] = 0.0
+        out[8] = 0.0
+        out[9] = 0.0
     if h_th > 0.0:
         i1_a = (-w * pm_b - e_a) / R_r1_t
         i1_b = (w * pm_a - e_b) / R_r1_t
@@ -212,15 +289,73 @@ def _derivative(c, x, v_a, v_b, direction, out):
 
 @numba.njit(cache=True)
 def _stator_current(c, x):
+    if c[36] > 0.0 and (c[7] != 0.0 or c[23] != 0.0):
+        ia, ib, _, _, _ = _t_solve(c, x)
+        return ia, ib
     d_a = x[0] - x[2]
     d_b = x[1] - x[3]
-    g = _sat(math.sqrt(d_a * d_a + d_b * d_b), c[10], c[11], c[12]) / c[1]
+    g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / c[1]
     return d_a * g, d_b * g
 
 
 @numba.njit(cache=True)
-def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out):
-    """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s); final state in x0."""
+def _terminal_current(c, x, v_a, v_b):
+    """Recorded stator current: the branch current plus the stator-side iron-loss current."""
+    ia, ib = _stator_current(c, x)
+    gs = c[34]
+    if gs == 0.0:
+        return ia, ib
+    rs = c[0] * (1.0 + c[16] * x[7])
+    v_a = v_a - c[21]
+    v_b = v_b - c[22]
+    Ud = c[13]
+    if Ud > 0.0:
+        s_r = _drop_sign(ia, c[14])
+        s_s = _drop_sign(-0.5 * ia + SQRT3_2 * ib, c[14])
+        s_t = _drop_sign(-0.5 * ia - SQRT3_2 * ib, c[14])
+        v_a = v_a - Ud * (2.0 / 3.0) * (s_r - 0.5 * (s_s + s_t))
+        v_b = v_b - Ud * (s_s - s_t) / (2.0 * SQRT3_2)
+    k = gs / (1.0 + rs * gs)
+    return ia + k * (v_a - rs * ia), ib + k * (v_b - rs * ib)
+
+
+@numba.njit(cache=True, inline="always")
+def _sign(v):
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+@numba.njit(cache=True)
+def _stick(c, x, w0, wl0, t):
+    """After a step: a speed that crossed zero against its Coulomb torque sticks at zero."""
+    p = c[20]
+    fc = c[19]
+    two = c[31] > 0.0
+    if two:
+        t_pass, t_dyn = _loads(c, t, x[8])
+        if fc > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
+            ia2, ib2 = _stator_current(c, x)
+            t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
+            t_sh = c[32] * x[9] + c[33] * (x[6] / p - x[8])
+            if abs(t_m - t_sh) <= fc:
+                x[6] = 0.0
+        if t_pass > 0.0 and wl0 != 0.0 and x[8] * wl0 <= 0.0:
+            t_sh = c[32] * x[9] + c[33] * (x[6] / p - x[8])
+            if abs(t_sh - t_dyn) <= t_pass:
+                x[8] = 0.0
+        return
+    t_pass, t_dyn = _loads(c, t, 0.0)
+    fct = fc + t_pass
+    if fct > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
+        ia2, ib2 = _stator_current(c, x)
+        t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
+        if abs(t_m) <= fct:
+            x[6] = 0.0
+
+
+@numba.njit(cache=True)
+def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0):
+    """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s) (the load side's on a
+    two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps)."""
     n = v_a.shape[0]
     x = x0.copy()
     k1 = np.empty(N_STATES)
@@ -230,12 +365,17 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out):
     xt = np.empty(N_STATES)
     hs = h / substeps
     p = c[20]
-    fc = c[19]
+    two = c[31] > 0.0
     for k in range(n):
-        ia, ib = _stator_current(c, x)
+        if linear:
+            ia, ib = _terminal_current(c, x, v_a[k], v_b[k])
+        elif k > 0:  # a held input: the sample closes the previous interval
+            ia, ib = _terminal_current(c, x, v_a[k - 1], v_b[k - 1])
+        else:
+            ia, ib = _terminal_current(c, x, 0.0, 0.0)
         out[0, k] = ia
         out[1, k] = ib
-        out[2, k] = x[6] / p
+        out[2, k] = x[8] if two else x[6] / p
         if k == n - 1:
             break
         va0, vb0 = v_a[k], v_b[k]
@@ -245,25 +385,24 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out):
             f0 = j / substeps
             fm = (j + 0.5) / substeps
             f1 = (j + 1.0) / substeps
+            ts = t0 + (k + f0) * h
             w0 = x[6]
-            d = 1.0 if w0 > 0.0 else (-1.0 if w0 < 0.0 else 0.0)
-            _derivative(c, x, va0 + f0 * dva, vb0 + f0 * dvb, d, k1)
+            wl0 = x[8]
+            d = _sign(w0)
+            dl = _sign(wl0)
+            _derivative(c, x, va0 + f0 * dva, vb0 + f0 * dvb, d, dl, ts, k1)
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k1[s]
-            _derivative(c, xt, va0 + fm * dva, vb0 + fm * dvb, d, k2)
+            _derivative(c, xt, va0 + fm * dva, vb0 + fm * dvb, d, dl, ts + 0.5 * hs, k2)
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k2[s]
-            _derivative(c, xt, va0 + fm * dva, vb0 + fm * dvb, d, k3)
+            _derivative(c, xt, va0 + fm * dva, vb0 + fm * dvb, d, dl, ts + 0.5 * hs, k3)
             for s in range(N_STATES):
                 xt[s] = x[s] + hs * k3[s]
-            _derivative(c, xt, va0 + f1 * dva, vb0 + f1 * dvb, d, k4)
+            _derivative(c, xt, va0 + f1 * dva, vb0 + f1 * dvb, d, dl, ts + hs, k4)
             for s in range(N_STATES):
                 x[s] = x[s] + hs / 6.0 * (k1[s] + 2.0 * (k2[s] + k3[s]) + k4[s])
-            if fc > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
-                ia2, ib2 = _stator_current(c, x)
-                t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
-                if abs(t_m) <= fc:
-                    x[6] = 0.0
+            _stick(c, x, w0, wl0, ts + hs)
         m = 0.0
         for s in range(N_STATES):
             m = max(m, abs(x[s]))
@@ -289,13 +428,14 @@ def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
         if not np.isfinite(c[0]):
             continue
         x0 = np.zeros(N_STATES)
-        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m])
+        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0)
     return out
 
 
 @numba.njit(cache=True)
-def simulate_extended(row, v_a, v_b, linear, h, substeps, x0):
-    """One trajectory from state ``x0`` (modified in place to the final state): (3, N)."""
+def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
+    """One trajectory from state ``x0`` (modified in place to the final state) starting at time
+    ``t0`` (s): (3, N)."""
     out = np.empty((3, v_a.shape[0]))
-    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out)
+    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0)
     return out

@@ -1,0 +1,406 @@
+"""Time-domain effects that real bench records bring: sensors, shaft and load.
+
+Each is a plant (:meth:`plant` on an extended-model row, or :meth:`plant_extras` with
+:meth:`measure` for what the sensors do to the record) and an augmentation
+(:meth:`extra_bounds`, :meth:`extra_starts`, :meth:`augment` and/or :meth:`measure`). Sizes,
+units and realistic ranges (the YAML defaults in ``conf/effect/``):
+
+``current_sensor_saturation``
+    Phase-current probes compress softly or clip at the acquisition range. Size: the probe's
+    level over the start-up current peak of the undisturbed record, 0.3-0.6 (1.5-3 times rated
+    current for a start-up peak of 5 times rated). Forms ``kind``: ``tanh`` ``L tanh(i/L)``,
+    ``knee`` (linear to ``L``, then ``L + w tanh((|i| - L)/w)``, ``w = L/2``), ``clip`` (hard
+    clipping at ``L``); ``probes``: 2 (line currents of R and S measured, T from the zero sum:
+    the common bench) or 3. Augmentation: ``f(i) = i / (1 + (|i|/L)^n)^(1/n)`` on each probed
+    phase, then back to alpha-beta; extras ``cs_level`` (``L`` over the recorded current peak)
+    and ``cs_sharpness`` ``n`` (about 2.5 matches ``tanh``, 8-15 a knee, 30+ a clip).
+``speed_sensor_gain``
+    Tachometer ``(1 + g) w + w_0``. Size: ``|g|``, 0.01-0.05; forms: ``sign`` of ``g``,
+    ``offset`` ``w_0`` as a fraction of synchronous speed (within +-0.005). Extras
+    ``tach_gain_error`` (fraction) and ``tach_offset`` (fraction of synchronous speed).
+    Excluded when the record has no speed channel.
+``sensor_offset``
+    DC offsets in the recorded voltage (V) and current (A) channels. A voltage offset drives a
+    DC current through the stator (the motor sees ``v - offset``: a kernel term); a current
+    offset is added to the record (a measurement). Size: the voltage offset's magnitude,
+    0.5-5 V; forms: ``current_offset`` magnitude, 0.05-0.3 A, ``parts`` (``both``, ``voltage``,
+    ``current``), the offset vectors' directions ``angle_v``, ``angle_i`` (rad, alpha-beta).
+    Extras ``dv_alpha``, ``dv_beta`` (fractions of the fundamental voltage amplitude),
+    ``di_alpha``, ``di_beta`` (fractions of the start-up current peak).
+``two_mass``
+    Motor and load inertias coupled by a torsional spring and damper, speed sensed on the load
+    side. Size: the resonance ``sqrt(k (1/J_m + 1/J_l))/2 pi``, 30-200 Hz; forms
+    ``inertia_ratio`` ``J_l/J_m`` 0.3-2, ``damping_ratio`` 0.02-0.1. The base model's ``J`` is the
+    total inertia (what a rigid-shaft fit sees); extras ``tm_freq`` (Hz), ``tm_ratio``,
+    ``tm_zeta``.
+``load_torque``
+    A load torque on the shaft. Size: the load torque over ``T_acc`` (the mean torque that
+    accelerates the rotor to its final speed, :attr:`EffectContext.torque_scale
+    <benchmark.core.effects.EffectContext.torque_scale>`; about 1-2 times rated torque), 0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
+    (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
+    (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record). One
+    augmentation fits all three: extras ``load_const``, ``load_quad``, ``load_step`` (over
+    ``T_acc``) and ``load_step_time`` (fraction of the record), the step smoothed over
+    ``max(2 Ts, 0.005 T_record)``.
+``channel_delay``
+    A time skew between the voltage and current channels. Size: 0.1-2 samples; form ``lag``:
+    ``current`` (the current channels lag) or ``voltage``. Augmentation: the simulated currents
+    delayed by ``skew`` samples (signed: positive = currents lag) by cubic (4-point Lagrange)
+    interpolation; extra ``skew`` (samples).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from benchmark.core.effects import Effect
+from benchmark.problems.timedomain.extended import IDX
+
+SQ3 = math.sqrt(3.0)
+
+
+# ----------------------------------------------------------------------------- current probes
+def compress_soft(i: np.ndarray, level: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """``i / (1 + (|i|/L)^n)^(1/n)`` (broadcast): linear at small current, flat at ``L``."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        x = np.abs(i) / level
+        small = x <= 1.0
+        xs = np.where(small, x, 1.0)
+        xl = np.where(small, 1.0, x)
+        low = i / (1.0 + xs**n) ** (1.0 / n)
+        high = np.sign(i) * level / (1.0 + xl ** (-n)) ** (1.0 / n)  # no overflow for large |i|
+        return np.where(small, low, high)
+
+
+def compress_form(i: np.ndarray, kind: str, level: float) -> np.ndarray:
+    """The plant's probe characteristics (``tanh``, ``knee``, ``clip``, ``soft``)."""
+    if kind == "tanh":
+        return level * np.tanh(i / level)
+    if kind == "knee":
+        w = 0.5 * level
+        a = np.abs(i)
+        return np.where(a <= level, i, np.sign(i) * (level + w * np.tanh((a - level) / w)))
+    if kind == "clip":
+        return np.clip(i, -level, level)
+    if kind == "soft":
+        return compress_soft(i, level, 4.0)
+    raise ValueError(f"current_sensor_saturation: kind must be tanh, knee, clip or soft, got {kind!r}")
+
+
+def _through_probes(sim: np.ndarray, fn, probes: int) -> np.ndarray:
+    """Apply ``fn`` to the probed phase currents of ``sim`` (n, 3, N), back to alpha-beta."""
+    out = sim.copy()
+    a, b = sim[:, 0], sim[:, 1]
+    r = a
+    s = -0.5 * a + 0.5 * SQ3 * b
+    fr, fs = fn(r), fn(s)
+    if probes == 3:
+        ft = fn(-0.5 * a - 0.5 * SQ3 * b)
+        out[:, 0] = (2.0 / 3.0) * (fr - 0.5 * (fs + ft))
+        out[:, 1] = (fs - ft) / SQ3
+    else:
+        out[:, 0] = fr
+        out[:, 1] = (fr + 2.0 * fs) / SQ3
+    return out
+
+
+class CurrentSensorSaturation(Effect):
+    name = "current_sensor_saturation"
+    size_name = "level_over_startup_peak"
+    realistic = (0.3, 0.6)
+    extra_names = ("cs_level", "cs_sharpness")
+    physics = "phase-current probes compress softly or clip at their range"
+    shows_in = "flat-topped start-up current peaks, the same level on each phase"
+    measure_stage = 1
+    FORM_DRAWS = {"kind": {"choice": ["tanh", "knee", "clip"]}}
+
+    def _probes(self, form=None) -> int:
+        return int({**self.form, **(form or {})}.get("probes", 2))
+
+    def plant(self, row, size, ctx, form=None):
+        return row.copy()
+
+    def plant_extras(self, size, ctx, form=None):
+        return np.array([float(size)])
+
+    def plant_measure(self, sim, extras, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        level = float(extras[0]) * ctx.I_peak
+        return _through_probes(sim, lambda i: compress_form(i, str(form.get("kind", "tanh")), level),
+                               self._probes(form))
+
+    def extra_bounds(self, ctx):
+        return np.array([0.3, 1.0]), np.array([8.0, 60.0])
+
+    def extra_starts(self, ctx):
+        return [np.array([1.1, 3.0]), np.array([0.95, 12.0]), np.array([1.0, 40.0])]
+
+    def measure(self, sim, extras, ctx):
+        extras = np.atleast_2d(extras)
+        level = (extras[:, 0] * ctx.I_peak)[:, None]
+        n = extras[:, 1][:, None]
+        return _through_probes(sim, lambda i: compress_soft(i, level, n), self._probes())
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = np.ravel(extras)
+        return {"level_A": float(x[0] * ctx.I_peak), "sharpness": float(x[1])}
+
+
+# ----------------------------------------------------------------------------- tachometer
+class SpeedSensorGain(Effect):
+    name = "speed_sensor_gain"
+    size_name = "gain_error"
+    realistic = (0.01, 0.05)
+    extra_names = ("tach_gain_error", "tach_offset")
+    physics = "tachometer gain error and offset"
+    shows_in = "steady speed off synchronous-minus-slip; a constant ratio in the speed residual"
+    measure_stage = 3
+    FORM_DRAWS = {"sign": {"choice": [-1.0, 1.0]}, "offset": [-0.005, 0.005]}
+
+    def plant(self, row, size, ctx, form=None):
+        return row.copy()
+
+    def plant_extras(self, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0))])
+
+    def extra_bounds(self, ctx):
+        return np.array([-0.1, -0.02]), np.array([0.1, 0.02])
+
+    def extra_starts(self, ctx):
+        return [np.array([0.0, 0.0])]
+
+    def measure(self, sim, extras, ctx):
+        extras = np.atleast_2d(extras)
+        out = sim.copy()
+        out[:, 2] = sim[:, 2] * (1.0 + extras[:, 0:1]) + extras[:, 1:2] * ctx.w_sync
+        return out
+
+    def applies_to(self, facts):
+        if not facts.get("has_speed", True):
+            return "the record has no speed channel"
+        return None
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = np.ravel(extras)
+        return {"gain": float(1.0 + x[0]), "offset_rad_s": float(x[1] * ctx.w_sync)}
+
+
+# ----------------------------------------------------------------------------- offsets
+class SensorOffset(Effect):
+    name = "sensor_offset"
+    size_name = "voltage_offset"
+    size_unit = "V"
+    realistic = (0.5, 5.0)
+    extra_names = ("dv_alpha", "dv_beta", "di_alpha", "di_beta")
+    physics = "DC offsets in the voltage (a few V) and current (tenths of A) channels"
+    shows_in = "a false DC current; Rs biased up; a DC term in the residual"
+    measure_stage = 2
+    FORM_DRAWS = {"parts": {"choice": ["both", "voltage", "current"]}, "current_offset": [0.05, 0.3],
+                  "angle_v": [0.0, 6.283185307179586], "angle_i": [0.0, 6.283185307179586]}
+
+    def _offsets(self, size, form):
+        form = {**self.form, **(form or {})}
+        parts = str(form.get("parts", "both"))
+        dv = float(size) if parts in ("both", "voltage") else 0.0
+        di = float(form.get("current_offset", 0.1)) if parts in ("both", "current") else 0.0
+        av, ai = float(form.get("angle_v", 0.5)), float(form.get("angle_i", 2.0))
+        return dv * math.cos(av), dv * math.sin(av), di * math.cos(ai), di * math.sin(ai)
+
+    def plant(self, row, size, ctx, form=None):
+        return row.copy()  # the motor sees the true voltage; the record carries the offset
+
+    def plant_voltages(self, v_a, v_b, size, ctx, form=None):
+        dva, dvb, _, _ = self._offsets(size, form)
+        return v_a + dva, v_b + dvb
+
+    def plant_extras(self, size, ctx, form=None):
+        dva, dvb, dia, dib = self._offsets(size, form)
+        return np.array([dva / ctx.V1, dvb / ctx.V1, dia / ctx.I_peak, dib / ctx.I_peak])
+
+    def extra_bounds(self, ctx):
+        return np.array([-0.05, -0.05, -0.03, -0.03]), np.array([0.05, 0.05, 0.03, 0.03])
+
+    def extra_starts(self, ctx):
+        return [np.zeros(4)]
+
+    def augment(self, rows, extras, ctx):
+        rows = rows.copy()
+        rows[:, IDX["v_off_a"]] = extras[:, 0] * ctx.V1
+        rows[:, IDX["v_off_b"]] = extras[:, 1] * ctx.V1
+        return rows
+
+    def measure(self, sim, extras, ctx):
+        extras = np.atleast_2d(extras)
+        out = sim.copy()
+        out[:, 0] = sim[:, 0] + extras[:, 2:3] * ctx.I_peak
+        out[:, 1] = sim[:, 1] + extras[:, 3:4] * ctx.I_peak
+        return out
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = np.ravel(extras)
+        return {"dv_alpha_V": float(x[0] * ctx.V1), "dv_beta_V": float(x[1] * ctx.V1),
+                "di_alpha_A": float(x[2] * ctx.I_peak), "di_beta_A": float(x[3] * ctx.I_peak)}
+
+
+# ----------------------------------------------------------------------------- shaft
+class TwoMass(Effect):
+    name = "two_mass"
+    size_name = "resonance"
+    size_unit = "Hz"
+    realistic = (30.0, 200.0)
+    extra_names = ("tm_freq", "tm_ratio", "tm_zeta")
+    physics = "motor and load inertias coupled by a torsional spring and damper; speed sensed on the load side"
+    shows_in = "speed oscillation and plateaus in the first cycles; torque ripple passed through the coupling"
+    FORM_DRAWS = {"inertia_ratio": [0.3, 2.0], "damping_ratio": [0.02, 0.1]}
+
+    def plant(self, row, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        x = np.array([[float(size), float(form.get("inertia_ratio", 1.0)), float(form.get("damping_ratio", 0.05))]])
+        return self.augment(row[None, :], x, ctx)[0]
+
+    def _f_max(self, ctx):
+        return 400.0 if not ctx.sample_time else min(400.0, 0.125 / ctx.sample_time)
+
+    def extra_bounds(self, ctx):
+        return np.array([10.0, 0.05, 0.002]), np.array([self._f_max(ctx), 5.0, 0.7])
+
+    def extra_starts(self, ctx):
+        fmax = self._f_max(ctx)
+        return [np.array([min(f, 0.9 * fmax), 1.0, 0.05]) for f in (40.0, 80.0, 150.0, 250.0)]
+
+    def augment(self, rows, extras, ctx):
+        rows = rows.copy()
+        f, r, z = extras[:, 0], extras[:, 1], extras[:, 2]
+        J = rows[:, IDX["J"]].copy()
+        J_m = J / (1.0 + r)
+        J_l = J * r / (1.0 + r)
+        J_r = J_m * J_l / (J_m + J_l)
+        k = (2.0 * np.pi * f) ** 2 * J_r
+        rows[:, IDX["J"]] = J_m
+        rows[:, IDX["J_l"]] = J_l
+        rows[:, IDX["k_sh"]] = k
+        rows[:, IDX["c_sh"]] = 2.0 * z * np.sqrt(k * J_r)
+        return rows
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = np.ravel(extras)
+        return {"resonance_Hz": float(x[0]), "J_load_over_J_motor": float(x[1]), "damping_ratio": float(x[2])}
+
+
+class LoadTorque(Effect):
+    name = "load_torque"
+    size_name = "torque_over_T_acc"
+    realistic = (0.05, 0.6)
+    extra_names = ("load_const", "load_quad", "load_step", "load_step_time")
+    physics = "a load torque: constant, ~speed^2, or stepping at an unknown instant"
+    shows_in = "steady slip and current rise over a window; a speed dip"
+    FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]}]
+
+    def _rise(self, ctx):
+        return max(2.0 * ctx.sample_time, 0.005 * ctx.record_duration)
+
+    def plant(self, row, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        kind = str(form.get("kind", "constant"))
+        row = row.copy()
+        T = float(size) * ctx.torque_scale
+        if kind == "constant":
+            row[IDX["T_L"]] = T
+        elif kind == "quadratic":
+            row[IDX["T_q"]] = T
+            row[IDX["w_ref"]] = ctx.w_sync
+        elif kind == "step":
+            row[IDX["T_s"]] = T
+            row[IDX["t_step"]] = float(form.get("step_fraction", 0.5)) * ctx.record_duration
+            row[IDX["t_rise"]] = 0.0
+        else:
+            raise ValueError(f"load_torque: kind must be constant, quadratic or step, got {kind!r}")
+        return row
+
+    def extra_bounds(self, ctx):
+        return np.array([0.0, 0.0, 0.0, 0.02]), np.array([1.5, 1.5, 1.5, 0.98])
+
+    def extra_starts(self, ctx):
+        return [np.array([0.1, 0.1, 0.0, 0.5]), np.array([0.0, 0.0, 0.2, 0.35]), np.array([0.0, 0.0, 0.2, 0.65]),
+                np.array([0.0, 0.0, 0.2, 0.85])]
+
+    def augment(self, rows, extras, ctx):
+        rows = rows.copy()
+        T = ctx.torque_scale
+        rows[:, IDX["T_L"]] = extras[:, 0] * T
+        rows[:, IDX["T_q"]] = extras[:, 1] * T
+        rows[:, IDX["w_ref"]] = ctx.w_sync
+        rows[:, IDX["T_s"]] = extras[:, 2] * T
+        rows[:, IDX["t_step"]] = extras[:, 3] * ctx.record_duration
+        rows[:, IDX["t_rise"]] = self._rise(ctx)
+        return rows
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = np.ravel(extras)
+        return {"constant_Nm": float(x[0] * ctx.torque_scale), "quadratic_at_sync_Nm": float(x[1] * ctx.torque_scale),
+                "step_Nm": float(x[2] * ctx.torque_scale), "step_time_s": float(x[3] * ctx.record_duration)}
+
+
+# ----------------------------------------------------------------------------- channel skew
+def fractional_delay(x: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``x`` (n, c, N) delayed by ``d`` (n,) samples (may be negative or fractional): 4-point
+    Lagrange interpolation, zeros before the record (at rest), the last value after it."""
+    n, c, N = x.shape
+    pad = int(np.ceil(np.max(np.abs(d)))) + 3 if len(d) else 3
+    xp = np.concatenate([np.zeros((n, c, pad)), x, np.repeat(x[:, :, -1:], pad, axis=2)], axis=2)
+    out = np.empty_like(x)
+    k = np.arange(N)
+    for m in range(n):
+        dm = float(d[m])
+        if not np.isfinite(dm):
+            out[m] = np.nan
+            continue
+        u = k - dm + pad  # position in xp
+        b = np.floor(u).astype(int)
+        t = u - b
+        w_m1 = -t * (t - 1.0) * (t - 2.0) / 6.0
+        w_0 = (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0
+        w_1 = -(t + 1.0) * t * (t - 2.0) / 2.0
+        w_2 = (t + 1.0) * t * (t - 1.0) / 6.0
+        xm = xp[m]
+        out[m] = w_m1 * xm[:, b - 1] + w_0 * xm[:, b] + w_1 * xm[:, b + 1] + w_2 * xm[:, b + 2]
+    return out
+
+
+class ChannelDelay(Effect):
+    name = "channel_delay"
+    size_name = "skew"
+    size_unit = "samples"
+    realistic = (0.1, 2.0)
+    extra_names = ("skew",)
+    physics = "a time skew between the voltage and current channels"
+    shows_in = "a quadrature residual at the supply frequency"
+    measure_stage = 0
+    FORM_DRAWS = {"lag": {"choice": ["current", "voltage"]}}
+
+    def plant(self, row, size, ctx, form=None):
+        return row.copy()
+
+    def plant_extras(self, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        sign = -1.0 if str(form.get("lag", "current")) == "voltage" else 1.0
+        return np.array([sign * float(size)])
+
+    def extra_bounds(self, ctx):
+        return np.array([-3.0]), np.array([3.0])
+
+    def extra_starts(self, ctx):
+        return [np.array([0.5]), np.array([-0.5])]
+
+    def measure(self, sim, extras, ctx):
+        extras = np.atleast_2d(extras)
+        out = sim.copy()
+        out[:, :2] = fractional_delay(np.ascontiguousarray(sim[:, :2]), extras[:, 0])
+        return out
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = float(np.ravel(extras)[0])
+        return {"skew_samples": x, "skew_s": x * ctx.sample_time}
