@@ -1,7 +1,8 @@
-"""``python -m benchmark.blind``: the time-domain diagnosis evaluated blind.
+"""``python -m benchmark.blind source=own|plant|motulator n=... seed=...``: the time-domain
+diagnosis evaluated blind, one data source at a time.
 
-The draws, the loop and the summary live in :mod:`benchmark.analysis.blind`; this entry point
-composes the config (``conf/blind.yaml``) and hands over the time-domain data generator.
+The sources, draws, loop and scores live in :mod:`benchmark.analysis.blind`; this entry point
+composes the config (``conf/blind.yaml``) and runs one source.
 """
 
 from __future__ import annotations
@@ -10,18 +11,14 @@ import sys
 
 import hydra
 
-from benchmark.analysis.blind import draw_sets, run_blind, set_config
+from benchmark.analysis.blind import run_source
 from benchmark.core.cli import run_hydra_main, user_errors
 
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="blind")
 @user_errors
 def main(cfg) -> None:
-    from synthetic.timedomain import generate
-
-    run_blind(cfg, "timedomain", draw_sets(cfg), set_config, generate,
-              "# Blind evaluation of the sim-to-real diagnosis",
-              ("python -m benchmark.blind " + " ".join(sys.argv[1:])).strip())
+    run_source(cfg, ("python -m benchmark.blind " + " ".join(sys.argv[1:])).strip())
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ slip- or current-driven leakage saturation; ...), a machine whose parameters are
 the preset's bare 6-parameter circuit, and noise. The generator writes the data folder; its
 ``truth.yaml`` is moved to a separate folder before the diagnosis is given the data folder. The
 verdicts are compared with the truth afterwards: confusion matrix, correct rate, false-alarm
-rate on effect-free sets, median held-out gap shrinkage of correct verdicts
+rate on effect-free sets, median explained share of correct verdicts, with Wilson intervals
 (:func:`benchmark.analysis.blind.summarise`, :func:`benchmark.analysis.blind.render`), written to ``out``.
 """
 
@@ -60,9 +60,9 @@ def set_config(cfg, d: dict):
                 par[name] = float(par[name]) * sc
         par.X2 = float(par.X1)  # the base model's tie holds in the plant
         c.noise.seed = d["noise_seed"]
-        c.effects = ["none"] if d["effect"] == "none" else [d["effect"]]
-        c.effect_size = {} if d["effect"] == "none" else {d["effect"]: d["size"]}
-        c.effect_form = {} if d["effect"] == "none" else {d["effect"]: d.get("form", {})}
+        c.effects = list(d["effects"]) or ["none"]
+        c.effect_size = dict(d["size"])
+        c.effect_form = {k: dict(v) for k, v in d["form"].items()}
         c.data.path = None
     return c
 

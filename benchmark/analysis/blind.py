@@ -1,25 +1,39 @@
-"""``python -m benchmark.analysis.blind``: the diagnosis evaluated blind.
+"""The diagnosis evaluated blind, per data source.
 
-Each data set gets an effect drawn at random (or none), a size drawn log-uniformly in the
-effect's realistic range, a randomly varied form of the effect (so that the diagnosis is not
-tuned to one plant formula), a motor whose parameters are spread around the preset, and
-noise. The data folder holds only ``meta.yaml`` and the records; the truth goes to a separate
-folder that the diagnosis is never given. The verdicts are then compared with the truth:
-confusion matrix, correct rate, false-alarm rate on effect-free sets, and the held-out gap
-shrinkage of correct verdicts, written to ``out``.
+``python -m benchmark.blind source=own|plant|motulator n=... seed=...`` (time domain) and
+``python -m benchmark.blind_admittance`` (slip sweep) make ``n`` data sets, each with a drawn
+set of effects (none, one or two), write each to a folder, move its ``truth.yaml`` to a
+separate folder before the diagnosis is given the data folder, and compare the verdicts with
+the truth afterwards. Sources:
+
+* ``own``: the project's synthetic plant (:mod:`synthetic.timedomain`) with the effects of
+  ``conf/effect/`` (sizes log-uniform in their realistic ranges, forms from each effect's
+  ``random_form``), a motor spread around the preset, Gaussian noise;
+* ``plant``: the independent flux-linkage plant (:mod:`synthetic.independent`), which draws
+  its own motors, scenarios, effect sizes and forms and non-Gaussian noise;
+* ``motulator``: the third-party simulator (:mod:`synthetic.motulator_source`; effects
+  ``main_saturation``, ``two_mass``, ``load_torque``).
+
+Scores (:func:`summarise`): a verdict counts right when its effect set equals the injected
+set (``none`` for an effect-free set; an extra name is a miss; ``unexplained`` names no
+effect), whatever its status; with Wilson 95 % intervals. False alarms: effect-free sets
+whose status is not ``no_gap``. Two-effect sets: both injected effects named. Injected
+effects the base model cannot see (the diagnosis's own base held-out gap within the noise
+band: status ``no_gap``) are left out of the score and listed.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
 from omegaconf import OmegaConf, open_dict
 
 from benchmark.core.effects import load_effects
-from benchmark.core.io import write_table_atomic, write_text_atomic, write_yaml_atomic
+from benchmark.core.io import write_text_atomic, write_yaml_atomic
 
 FORM_CHOICES = {
     "double_cage": lambda rng: {"ladder": bool(rng.integers(2)), "tau2": float(rng.uniform(0.002, 0.008))},
@@ -27,147 +41,366 @@ FORM_CHOICES = {
     "leakage_saturation": lambda rng: {"exponent": float(rng.choice([1.5, 2.0, 3.0]))},
     "inverter_drop": lambda rng: {"smooth": float(rng.choice([0.0, 0.02, 0.05]))},
 }
-
-
 MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
+#: Effects a time-domain base model of case 2 already holds (never an injected "effect").
+IN_BASE = {2: ("coulomb_friction",), 1: ()}
 
 
-def draw_sets(cfg, problem: str = "timedomain", motor_keys=MOTOR_KEYS, form_choices=None) -> list[dict]:
-    """The n blind draws: effect (or none), size, form, motor spread and noise seed.
+def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
+    """Wilson score interval of a proportion k/n (95 % by default)."""
+    if n == 0:
+        return [math.nan, math.nan]
+    p = k / n
+    den = 1 + z**2 / n
+    c = (p + z**2 / (2 * n)) / den
+    h = z * math.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / den
+    return [max(0.0, c - h), min(1.0, c + h)]
+
+
+def n_effects_of(i: int, cfg) -> int:
+    """Effect count of set ``i``: every ``1/free_share``-th set is effect-free, a share
+    ``two_share`` of the others carry two effects (deterministic, so that each count is met)."""
+    n = int(cfg.n)
+    n_free = int(round(float(cfg.free_share) * n))
+    if i < n_free:
+        return 0
+    n_two = int(round(float(cfg.two_share) * (n - n_free)))
+    return 2 if i - n_free < n_two else 1
+
+
+def draw_sets(cfg, problem: str = "timedomain", motor_keys=MOTOR_KEYS, form_choices=None, exclude=()) -> list[dict]:
+    """The ``own`` draws: effects (none, one or two), sizes, forms, motor spread, noise seed.
 
     Each set has its own random stream (spawned from ``cfg.seed``), so a set's draw does not
     depend on how many sets come before it."""
     form_choices = FORM_CHOICES if form_choices is None else form_choices
     effects = load_effects(problem)
-    names = sorted(effects)
-    outcomes = names + ["none"]
-    weights = np.array([1.0] * len(names) + [float(cfg.none_weight)])
+    names = sorted(n for n in effects if n not in exclude and n not in list(cfg.get("exclude_effects") or []))
     seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
     draws = []
     for i, ss in enumerate(seeds):
         rng = np.random.default_rng(ss)
-        effect = str(rng.choice(outcomes, p=weights / weights.sum()))
-        d = {"index": i, "effect": effect, "noise_seed": int(rng.integers(2**31 - 1))}
+        k = n_effects_of(i, cfg) if "free_share" in cfg else int(rng.random() >= 1.0 / (1 + len(names)))
+        chosen = sorted(str(e) for e in rng.choice(names, size=k, replace=False)) if k else []
+        d = {"index": i, "effects": chosen, "noise_seed": int(rng.integers(2**31 - 1))}
         spread = float(cfg.vary_motor)
-        d["motor_scale"] = {k: float(np.exp(rng.uniform(-spread, spread))) for k in motor_keys}
-        if effect != "none":
-            lo, hi = effects[effect].realistic
-            d["size"] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-            d["form"] = form_choices[effect](rng) if (cfg.vary_form and effect in form_choices) else {}
+        d["motor_scale"] = {m: float(np.exp(rng.uniform(-spread, spread))) for m in motor_keys}
+        d["size"], d["form"] = {}, {}
+        for e in chosen:
+            lo, hi = effects[e].realistic
+            d["size"][e] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+            if cfg.vary_form:
+                if e in form_choices:
+                    d["form"][e] = form_choices[e](rng)
+                elif hasattr(effects[e], "random_form"):
+                    d["form"][e] = effects[e].random_form(rng)
+        d["effect"] = "+".join(chosen) or "none"  # the single-effect label of older callers
         draws.append(d)
     return draws
 
 
 def set_config(cfg, d: dict):
-    """The synthetic configuration of one draw (a copy of cfg)."""
+    """The synthetic configuration of one ``own`` draw (a copy of cfg)."""
     c = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
     with open_dict(c):
         for k, s in d["motor_scale"].items():
             c.motor.parameters[k] = float(c.motor.parameters[k]) * s
         c.noise.seed = d["noise_seed"]
-        c.effects = [] if d["effect"] == "none" else [d["effect"]]
-        c.effect_size = {} if d["effect"] == "none" else {d["effect"]: d["size"]}
-        c.effect_form = {} if d["effect"] == "none" else {d["effect"]: d.get("form", {})}
+        c.effects = list(d["effects"])
+        c.effect_size = dict(d["size"])
+        c.effect_form = {k: dict(v) for k, v in d["form"].items()}
         c.data.path = None
     return c
 
 
-def summarise(rows: list[dict], labels: list[str]) -> dict:
+# -- sources ---------------------------------------------------------------------------------
+def own_source(cfg):
+    """(draws, make(d, folder)) of the project's own synthetic plant."""
+    from synthetic.timedomain import generate
+
+    draws = draw_sets(cfg, exclude=IN_BASE[int(cfg.diagnosis.base_case)])
+
+    def make(d, folder):
+        generate(set_config(cfg, d), folder)
+
+    return draws, make
+
+
+def plant_source(cfg):
+    """(draws, make) of the independent plant: its own motors, scenarios, sizes, forms, noise."""
+    from synthetic.independent import EFFECTS, draw_blind_set, make_dataset, write_dataset
+
+    ours = set(load_effects("timedomain"))
+    skip = set(IN_BASE[int(cfg.diagnosis.base_case)]) | set(cfg.get("exclude_effects") or [])
+    seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
+    draws = []
+    for i, ss in enumerate(seeds):
+        rng = np.random.default_rng(ss)
+        k = n_effects_of(i, cfg)
+        kind = str(rng.choice(["dol", "six_step", "pwm"], p=[0.4, 0.35, 0.25]))
+        pool = sorted(e for e in EFFECTS if e in ours and e not in skip
+                      and not (EFFECTS[e].inverter_only and kind == "dol"))
+        chosen = sorted(str(e) for e in rng.choice(pool, size=k, replace=False)) if k else []
+        spec = draw_blind_set(rng, effects=chosen, scenario=kind)
+        if cfg.get("plant_duration"):  # default: the plant's own draw (0.8-1.5 s: big motors need it)
+            spec["scenario"]["duration"] = float(cfg.plant_duration)
+        if not cfg.get("plant_stop", True):
+            spec["stop"] = None
+        draws.append({"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]})
+
+    def make(d, folder):
+        write_dataset(make_dataset(d["spec"]), folder)
+
+    return draws, make
+
+
+MOTULATOR_EFFECTS = ("main_saturation", "two_mass", "load_torque")
+
+
+def motulator_source(cfg):
+    """(draws, make) of motulator: the preset motor spread, dol or six-step, its three effects."""
+    from synthetic.motulator_source import make_motulator_dataset
+
+    base = OmegaConf.to_container(cfg.motor, resolve=True)
+    seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
+    draws = []
+    for i, ss in enumerate(seeds):
+        rng = np.random.default_rng(ss)
+        k = n_effects_of(i, cfg)
+        chosen = sorted(str(e) for e in rng.choice(MOTULATOR_EFFECTS, size=k, replace=False)) if k else []
+        par = dict(base["parameters"])
+        for m in MOTOR_KEYS:
+            par[m] = float(par[m]) * float(np.exp(rng.uniform(-cfg.vary_motor, cfg.vary_motor)))
+        opts = {}
+        for e in chosen:
+            if e == "main_saturation":
+                opts[e] = {"size": float(rng.uniform(0.15, 0.5)), "exponent": float(rng.choice([2.0, 4.0, 6.0]))}
+            elif e == "two_mass":
+                opts[e] = {"size": float(rng.uniform(0.3, 0.6)), "resonance_hz": float(rng.uniform(15, 40)),
+                           "damping_ratio": float(rng.uniform(0.05, 0.2))}
+            else:
+                form = str(rng.choice(["step", "constant", "quadratic"]))
+                opts[e] = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
+                if form == "step":
+                    opts[e]["time"] = float(rng.uniform(0.3, 0.6) * float(cfg.duration))
+        scenario = str(rng.choice(["dol", "six_step"]))
+        motor = {"parameters": par, "pole_pairs": int(base["pole_pairs"]), "frequency": 50.0,
+                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": float(cfg.rated_power)}
+        noise = {"current_std": float(rng.uniform(0.02, 0.08)), "current_colored_std": float(rng.uniform(0.0, 0.05)),
+                 "speed_std": float(rng.uniform(0.05, 0.2)), "speed_quantum": float(rng.choice([0.0, 0.1, 0.5]))}
+        draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
+                      "noise": noise, "seed": int(rng.integers(2**31 - 1))})
+
+    def make(d, folder):
+        make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
+                               float(cfg.duration), float(cfg.sample_rate), bool(cfg.get("motulator_stop", True)))
+
+    return draws, make
+
+
+SOURCES = {"own": own_source, "plant": plant_source, "motulator": motulator_source}
+
+
+# -- scoring -----------------------------------------------------------------------------------
+def label_of(effects) -> str:
+    return "+".join(sorted(effects)) or "none"
+
+
+def predicted_label(doc: dict) -> str:
+    if doc["status"] == "no_gap":
+        return "none"
+    if doc["status"] == "unexplained":
+        return "unexplained"
+    return label_of(doc["effects"])
+
+
+def summarise(rows: list[dict]) -> dict:
+    """Scores of one source (see the module docstring)."""
+    scored = [r for r in rows if not r["invisible"]]
+    left_out = [r for r in rows if r["invisible"]]
+    eff_rows = [r for r in scored if r["truth"] != "none"]
+    free = [r for r in rows if r["truth"] == "none"]
+    two = [r for r in scored if len(r["truth_effects"]) == 2]
+    correct = [r for r in scored if r["truth"] == r["predicted"]]
+    eff_correct = [r for r in eff_rows if r["truth"] == r["predicted"]]
+    alarms = [r for r in free if r["status"] != "no_gap"]
+    both = [r for r in two if set(r["truth_effects"]) <= set(r["effects"])]
+    shares = [r["explained_share"] for r in eff_correct]
+    labels = sorted({r["truth"] for r in rows} | {r["predicted"] for r in rows},
+                    key=lambda s: (s in ("none", "unexplained"), s.count("+"), s))
     idx = {k: i for i, k in enumerate(labels)}
     cm = np.zeros((len(labels), len(labels)), dtype=int)
+    for r in scored:
+        cm[idx[r["truth"]], idx[r["predicted"]]] += 1
+    statuses = {}
     for r in rows:
-        cm[idx[r["truth"]], idx[r["verdict"]]] += 1
-    correct = sum(r["truth"] == r["verdict"] for r in rows)
-    none_rows = [r for r in rows if r["truth"] == "none"]
-    false_alarms = sum(r["verdict"] != "none" for r in none_rows)
-    shrink = [1.0 - r["gap_after"] / r["gap_before"] for r in rows
-              if r["truth"] == r["verdict"] and r["truth"] != "none" and r["gap_before"] > 0]
-    # the noise floor of the held-out RMS: what effect-free sets leave (the estimated noise
-    # levels are only good to ~10 %, so it is not exactly 1)
-    floor = float(np.median([r["gap_after"] for r in none_rows])) if none_rows else 1.0
-    removed = [(r["gap_before"] ** 2 - r["gap_after"] ** 2) / (r["gap_before"] ** 2 - floor**2) for r in rows
-               if r["truth"] == r["verdict"] and r["truth"] != "none" and r["gap_before"] > floor]
+        statuses[r["status"]] = statuses.get(r["status"], 0) + 1
     return {
-        "n": len(rows),
-        "correct": int(correct),
-        "correct_rate": correct / len(rows) if rows else math.nan,
-        "effect_free_sets": len(none_rows),
-        "false_alarms": int(false_alarms),
-        "false_alarm_rate": false_alarms / len(none_rows) if none_rows else math.nan,
-        "median_heldout_gap_shrinkage_correct": float(np.median(shrink)) if shrink else math.nan,
-        "heldout_noise_floor": floor,
-        "median_excess_misfit_removed_correct": float(np.median(removed)) if removed else math.nan,
-        "labels": labels,
-        "confusion": cm.tolist(),
+        "n": len(rows), "scored": len(scored),
+        "left_out_invisible": [{"index": r["index"], "truth": r["truth"], "gap_before": r["gap_before"]}
+                               for r in left_out],
+        "exact": len(correct), "exact_rate": len(correct) / len(scored) if scored else math.nan,
+        "exact_ci95": wilson(len(correct), len(scored)),
+        "effect_sets": len(eff_rows), "effect_sets_exact": len(eff_correct),
+        "effect_sets_exact_rate": len(eff_correct) / len(eff_rows) if eff_rows else math.nan,
+        "effect_sets_exact_ci95": wilson(len(eff_correct), len(eff_rows)),
+        "effect_free_sets": len(free), "false_alarms": len(alarms),
+        "false_alarm_rate": len(alarms) / len(free) if free else math.nan,
+        "false_alarm_ci95": wilson(len(alarms), len(free)),
+        "two_effect_sets": len(two), "both_named": len(both),
+        "both_named_rate": len(both) / len(two) if two else math.nan,
+        "both_named_ci95": wilson(len(both), len(two)),
+        "median_explained_share_correct": float(np.median(shares)) if shares else math.nan,
+        "statuses": statuses, "labels": labels, "confusion": cm.tolist(),
     }
 
 
-def render(summary: dict, rows: list[dict], cmd: str) -> str:
-    labels = summary["labels"]
-    cm = np.array(summary["confusion"])
-    lines = ["# Blind evaluation of the sim-to-real diagnosis", "", f"Command: `{cmd}`", "",
-             f"{summary['n']} data sets; **{summary['correct']} correct verdicts "
-             f"({100 * summary['correct_rate']:.0f} %)**; false alarms on effect-free sets: "
-             f"{summary['false_alarms']} of {summary['effect_free_sets']} "
-             f"({100 * summary['false_alarm_rate']:.0f} %); median held-out gap shrinkage "
-             f"(1 - RMS after / RMS before, over noise) for correct verdicts: "
-             f"{100 * summary['median_heldout_gap_shrinkage_correct']:.0f} %; the held-out RMS over noise falls to "
-             f"the effect-free sets' floor ({summary['heldout_noise_floor']:.3f}): median share of the excess "
-             f"held-out misfit (chi^2 above that floor) removed "
-             f"{100 * summary['median_excess_misfit_removed_correct']:.0f} %.",
-             "",
-             "Rows: the effect injected; columns: the verdict.", "",
-             "| truth \\ verdict | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+def _pct(x):
+    return "n/a" if x != x else f"{100 * x:.0f} %"
+
+
+def _ci(c):
+    return "" if c[0] != c[0] else f" (95 % CI {100 * c[0]:.0f}-{100 * c[1]:.0f} %)"
+
+
+def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) -> str:
+    s = summary
+    lines = [title, "", f"Command: `{cmd}`", "", f"Thresholds: {tuned}", "",
+             f"- {s['n']} data sets, {s['scored']} scored; exact effect set named: **{s['exact']} of {s['scored']} "
+             f"({_pct(s['exact_rate'])}){_ci(s['exact_ci95'])}**",
+             f"- sets with effects: {s['effect_sets_exact']} of {s['effect_sets']} exact "
+             f"({_pct(s['effect_sets_exact_rate'])}){_ci(s['effect_sets_exact_ci95'])}",
+             f"- false alarms on effect-free sets: {s['false_alarms']} of {s['effect_free_sets']} "
+             f"({_pct(s['false_alarm_rate'])}){_ci(s['false_alarm_ci95'])}",
+             f"- two-effect sets with both named: {s['both_named']} of {s['two_effect_sets']} "
+             f"({_pct(s['both_named_rate'])}){_ci(s['both_named_ci95'])}",
+             f"- median explained share of the excess held-out misfit, correct verdicts with effects: "
+             f"{_pct(s['median_explained_share_correct'])}",
+             "- statuses: " + ", ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items()))]
+    if s["left_out_invisible"]:
+        lines.append("- left out of the score (injected, but the base model's held-out gap is within the noise "
+                     "band): " + ", ".join(f"set {r['index']} ({r['truth']}, {r['gap_before']:.2f})"
+                                          for r in s["left_out_invisible"]))
+    labels, cm = s["labels"], np.array(s["confusion"])
+    lines += ["", "Rows: the injected set; columns: the verdict (scored sets).", "",
+              "| truth \\ verdict | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for i, lab in enumerate(labels):
-        lines.append(f"| {lab} | " + " | ".join(str(v) if v else "." for v in cm[i]) + " |")
-    lines += ["", "| set | truth | size | form | verdict | held-out gap before | after |",
-              "|---|---|---|---|---|---|---|"]
+        if cm[i].sum():
+            lines.append(f"| {lab} | " + " | ".join(str(v) if v else "." for v in cm[i]) + " |")
+    lines += ["", "| set | truth | status | verdict | held-out gap before | after | explained share | s |",
+              "|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['index']} | {r['truth']} | {r.get('size', '')} | {r.get('form', '')} | {r['verdict']} "
-                     f"| {r['gap_before']:.3f} | {r['gap_after']:.3f} |")
+        lines.append(f"| {r['index']} | {r['truth']} | {r['status']} | {r['verdict']} | {r['gap_before']:.2f} "
+                     f"| {r['gap_after']:.2f} | {_pct(r['explained_share'])} | {r['wall_time_s']:.0f} |")
     return "\n".join(lines) + "\n"
 
 
-def run_blind(cfg, problem: str, draws: list[dict], set_config, generate, title: str, command: str) -> dict:
-    """Make, hide the truth of, and diagnose every drawn set; write the confusion matrix and
-    statistics to ``cfg.out``. Shared by the time-domain and slip-sweep evaluations."""
+def diagnose_folder(cfg, folder: Path, outdir: Path) -> dict:
+    """The diagnosis of a data folder (its truth already moved away)."""
     from benchmark.core.harness import run_diagnosis
 
+    sc = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
+    with open_dict(sc):
+        sc.data.path = str(folder)
+        sc.effects, sc.effect_size, sc.effect_form = [], {}, {}
+        sc.figures = False
+    return run_diagnosis(sc, outdir)
+
+
+def run_source(cfg, command: str) -> dict:
+    """Make, hide the truth of, and diagnose every set of ``cfg.source``; write the scores to
+    ``cfg.out/<source>``."""
+    source = str(cfg.source)
+    if source not in SOURCES:
+        from benchmark.core.errors import ConfigError
+
+        raise ConfigError(f"source: one of {sorted(SOURCES)}, got {source!r}")
+    draws, make = SOURCES[source](cfg)
+    work = Path(cfg.workdir) / source
+    out = Path(cfg.out) / source
+    rows = []
+    results_file = work / "rows.jsonl"
+    done = {}
+    if results_file.exists() and cfg.get("resume", True):
+        for line in results_file.read_text().splitlines():
+            r = json.loads(line)
+            done[r["index"]] = r
+    work.mkdir(parents=True, exist_ok=True)
+    if cfg.get("report_only"):  # score the sets diagnosed so far (an interrupted run)
+        draws = [d for d in draws if d["index"] in done]
+    for d in draws:
+        if d["index"] in done:
+            rows.append(done[d["index"]])
+            continue
+        name = f"set_{d['index']:03d}"
+        folder = work / "sets" / name
+        if folder.exists():
+            shutil.rmtree(folder)
+        make(d, folder)
+        # the truth leaves the data folder before the diagnosis sees it
+        (work / "truth").mkdir(parents=True, exist_ok=True)
+        if (folder / "truth.yaml").exists():
+            (folder / "truth.yaml").replace(work / "truth" / f"{name}.yaml")
+        doc = diagnose_folder(cfg, folder, work / "diagnoses" / name)
+        truth = label_of(d["effects"])
+        row = {"index": d["index"], "truth": truth, "truth_effects": list(d["effects"]),
+               "predicted": predicted_label(doc), "status": doc["status"], "verdict": doc["verdict"],
+               "effects": list(doc["effects"]), "explained_share": float(doc["explained_share"]),
+               "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
+               "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
+               "invisible": bool(d["effects"]) and doc["status"] == "no_gap",
+               "indistinguishable": doc.get("indistinguishable", []),
+               "wall_time_s": float(doc.get("wall_time_s", math.nan)),
+               "draw": {k: v for k, v in d.items() if k not in ("spec",)}}
+        rows.append(row)
+        with open(results_file, "a") as fh:
+            fh.write(json.dumps(row, default=float) + "\n")
+        print(f"[{source}] set {d['index']:3d}: truth {truth:<40} -> {row['status']:<16} {row['verdict']:<40} "
+              f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f} ({row['wall_time_s']:.0f} s)", flush=True)
+    summary = summarise(rows)
+    out.mkdir(parents=True, exist_ok=True)
+    title = f"# Blind evaluation of the time-domain diagnosis: source `{source}`"
+    text = render(summary, rows, command, title, str(cfg.tuned_on))
+    write_text_atomic(out / "confusion.md", text)
+    doc = {"summary": summary, "sets": rows}
+    write_text_atomic(out / "blind.json", json.dumps(doc, indent=1, default=float) + "\n")
+    write_yaml_atomic(out / "config.yaml", OmegaConf.to_container(cfg, resolve=True))
+    print(text)
+    return summary
+
+
+# -- the slip-sweep evaluation (single effect per set) -------------------------------------
+def run_blind(cfg, problem: str, draws: list[dict], set_config, generate, title: str, command: str) -> dict:
+    """Make, hide the truth of, and diagnose every drawn set of a synthetic generator
+    (``set_config(cfg, draw)`` -> config, ``generate(config, folder)``); write the scores."""
     work = Path(cfg.workdir)
     out = Path(cfg.out)
     rows = []
     for d in draws:
         sc = set_config(cfg, d)
-        folder = work / "sets" / f"set_{d['index']:03d}"
+        name = f"set_{d['index']:03d}"
+        folder = work / "sets" / name
         generate(sc, folder)
-        # the truth leaves the data folder before the diagnosis sees it
         (work / "truth").mkdir(parents=True, exist_ok=True)
-        (folder / "truth.yaml").replace(work / "truth" / f"set_{d['index']:03d}.yaml")
-        with open_dict(sc):
-            sc.data.path = str(folder)
-            sc.effects, sc.effect_size, sc.effect_form = [], {}, {}
-            sc.figures = False
-        doc = run_diagnosis(sc, work / "diagnoses" / f"set_{d['index']:03d}")
-        row = {"index": d["index"], "truth": d["effect"], "verdict": doc["verdict"],
-               "gap_before": doc["gap_before"]["heldout_rms_over_noise"],
-               "gap_after": doc["gap_after"]["heldout_rms_over_noise"],
-               "ranking": [{k: r[k] for k in ("effect", "heldout_reduction", "criterion")} for r in doc["ranking"][:3]]}
-        if "size" in d:
-            row["size"] = round(d["size"], 4)
-            row["form"] = d.get("form", {})
+        (folder / "truth.yaml").replace(work / "truth" / f"{name}.yaml")
+        doc = diagnose_folder(cfg, folder, work / "diagnoses" / name)
+        effects = [] if d["effect"] == "none" else d["effect"].split("+")
+        row = {"index": d["index"], "truth": label_of(effects), "truth_effects": effects,
+               "predicted": predicted_label(doc), "status": doc["status"], "verdict": doc["verdict"],
+               "effects": list(doc["effects"]), "explained_share": float(doc["explained_share"]),
+               "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
+               "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
+               "invisible": bool(effects) and doc["status"] == "no_gap",
+               "wall_time_s": float(doc.get("wall_time_s", math.nan))}
         rows.append(row)
-        print(f"set {d['index']:3d}: truth {d['effect']:<20} verdict {doc['verdict']:<20} "
+        print(f"set {d['index']:3d}: truth {row['truth']:<20} verdict {row['verdict']:<20} ({row['status']}) "
               f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f}", flush=True)
-    labels = sorted(load_effects(problem)) + ["none"]
-    summary = summarise(rows, labels)
+    summary = summarise(rows)
     out.mkdir(parents=True, exist_ok=True)
-    text = render(summary, [{k: v for k, v in r.items() if k != "ranking"} for r in rows], command)
-    text = text.replace("# Blind evaluation of the sim-to-real diagnosis", title)
+    text = render(summary, rows, command, title, str(cfg.get("tuned_on", "")))
     write_text_atomic(out / "confusion.md", text)
-    write_text_atomic(out / "blind.json", json.dumps({"summary": summary, "sets": rows}, indent=1) + "\n")
-    write_table_atomic(out / "confusion.csv", {"truth": np.array(labels, dtype=object),
-                                               **{v: np.array(summary["confusion"])[:, j]
-                                                  for j, v in enumerate(labels)}})
+    doc = {"summary": summary, "sets": rows}
+    write_text_atomic(out / "blind.json", json.dumps(doc, indent=1, default=float) + "\n")
     write_yaml_atomic(out / "config.yaml", OmegaConf.to_container(cfg, resolve=True))
     print(text)
     return summary

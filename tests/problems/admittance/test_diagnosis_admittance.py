@@ -86,6 +86,9 @@ def test_each_effect_at_a_mid_realistic_size_is_named(name):
     data, _truth = sweep(name)
     doc = diagnose_sweep(data, EFFECTS, AdmittanceDiagnosisSettings())
     assert doc["verdict"] == name, [(r["effect"], round(r["heldout_reduction"], 3)) for r in doc["ranking"]]
+    # the contract shared with the time-domain diagnosis
+    assert doc["status"] in ("explained", "partly_explained") and doc["effects"] == [name]
+    assert 0.3 <= doc["explained_share"] <= 1.0
     top = doc["ranking"][0]
     assert top["effect"] == name and top["criterion"] < 0
     assert doc["gap_after"]["heldout_rms_over_noise"] < doc["gap_before"]["heldout_rms_over_noise"]
@@ -95,6 +98,7 @@ def test_effect_free_sweep_gives_none():
     data, _truth = sweep("none")
     doc = diagnose_sweep(data, EFFECTS, AdmittanceDiagnosisSettings())
     assert doc["verdict"] == "none"
+    assert doc["status"] == "no_gap" and doc["effects"] == [] and doc["explained_share"] == 0.0
     assert doc["gap_before"]["heldout_chi2_per_residual"] < 1.5
     assert all(r["heldout_reduction"] < 0.05 for r in doc["ranking"])
     assert 0.7 < doc["noise_level"]["percent_of_full_scale"] / 0.03 < 1.3  # noise estimated from the data

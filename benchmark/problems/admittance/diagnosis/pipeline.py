@@ -57,6 +57,8 @@ class AdmittanceDiagnosisSettings:
 
     min_gap : optional gate, base held-out chi^2 per residual (1 = noise); 0 = off (default).
     min_heldout_reduction : share of the held-out misfit a candidate must remove.
+    explained_share, partly_share : shares of the excess held-out misfit (above the noise)
+        separating ``explained`` / ``partly_explained`` / ``unexplained`` (:func:`verdict_contract`).
     fit_evaluations : evaluation limit of each local least-squares fit.
     near_synchronism : ``s_near``, the half-width of the near-synchronism region (slip).
     noise : the noise standard deviation of G and B (S) when known; null: estimated.
@@ -64,6 +66,8 @@ class AdmittanceDiagnosisSettings:
     """
 
     min_gap: float = 0.0
+    explained_share: float = 0.9
+    partly_share: float = 0.3
     min_heldout_reduction: float = 0.05
     fit_evaluations: int = 300
     near_synchronism: float = 0.12
@@ -364,6 +368,7 @@ def diagnose_sweep(
     fold_kind, folds = data.folds()
     base_fold = [base.fit(x_base, ~m, settings.fit_evaluations) for m in folds]
     held_base = sum(base.ssr(xf, m) for xf, m in zip(base_fold, folds, strict=True))
+    held_vectors = {"none": np.concatenate([base.residuals(xf, m) for xf, m in zip(base_fold, folds, strict=True)])}
     ins_base = base.ssr(x_base)
     # 4. candidates
     ranking, fitted = [], {}
@@ -380,6 +385,7 @@ def diagnose_sweep(
             xk, _ = _best_fit(model, st, ~m, settings.fit_evaluations)
             xs.append(xk)
             held_aug += model.ssr(xk, m)
+        held_vectors[eff.name] = np.concatenate([model.residuals(xk, m) for xk, m in zip(xs, folds, strict=True)])
         criterion = 0.5 * (ssr_full - ins_base) + model.k * math.log(n_res)
         ranking.append(
             {
@@ -440,7 +446,40 @@ def diagnose_sweep(
         "settings": asdict(settings),
         "wall_time_s": time.perf_counter() - t0,
     }
+    doc.update(verdict_contract(settings, held_vectors, verdict, data.n))
     doc["_models"] = {"base": (base, x_base), "fitted": fitted}
     return doc
+
+
+def verdict_contract(settings, held: dict, chosen: str, n_readings: int) -> dict:
+    """The diagnosis contract shared with the time-domain side: ``status`` (``no_gap``,
+    ``explained``, ``partly_explained``, ``unexplained``), ``verdict``, ``effects``,
+    ``explained_share`` (of the excess held-out misfit above the noise) and the noise band of
+    :func:`benchmark.core.uncertainty.misfit_ratio`. The noise of G and B comes from third
+    differences of the base residual (a median: relative uncertainty about ``1.17 / sqrt(n)``).
+    One effect at most is chosen on a sweep (no forward selection yet)."""
+    from benchmark.core.uncertainty import NoiseEstimate, misfit_ratio
+
+    u = 1.17 / math.sqrt(max(n_readings, 1))
+    noise = NoiseEstimate(1.0, u, 2.0 * n_readings, "third differences of the base residual")
+    before = misfit_ratio(held["none"], noise)
+    after = misfit_ratio(held[chosen], noise) if chosen in held else before
+    excess = before.ratio**2 - 1.0
+    share = 0.0
+    if excess > 0 and chosen != "none":
+        share = float(np.clip((before.ratio**2 - after.ratio**2) / excess, 0.0, 1.0))
+    if before.ratio <= before.threshold:
+        status, verdict, effects, share = "no_gap", "none", [], 0.0
+    elif chosen != "none" and (after.ratio <= after.threshold or share >= settings.explained_share):
+        status, verdict, effects = "explained", chosen, [chosen]
+    elif chosen != "none" and share >= settings.partly_share:
+        status, verdict, effects = "partly_explained", chosen, [chosen]
+    else:
+        status, verdict, effects = "unexplained", "unexplained", []
+    return {"status": status, "verdict": verdict, "effects": effects, "explained_share": share,
+            "per_effect": [{"effect": e, "drop_one_share": share, "parameters": {}} for e in effects],
+            "indistinguishable": [], "excluded": [],
+            "noise_band": [before.lower, before.threshold],
+            "verdict_candidate": chosen}
 
 

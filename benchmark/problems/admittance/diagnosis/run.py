@@ -51,7 +51,11 @@ def render_sweep_markdown(doc: dict) -> str:
     loc = doc["localisation"]
     hs = doc["heldout_scheme"]
     lines = [
-        f"# Diagnosis (slip sweep): **{doc['verdict']}**",
+        f"# Diagnosis (slip sweep): **{doc['verdict']}** ({doc.get('status', '').replace('_', ' ')})",
+        "",
+        "Share of the excess held-out misfit (above the noise) explained: "
+        f"{100 * doc.get('explained_share', 0.0):.0f} %; "
+        f"at the noise level up to a held-out RMS over noise of {doc.get('noise_band', [0, float('nan')])[1]:.3f}.",
         "",
         f"Data: {doc['data']}",
         "",

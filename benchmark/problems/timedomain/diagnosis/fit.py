@@ -1,46 +1,45 @@
-"""Joint time-domain fits of the base and augmented models used by the diagnosis.
+"""Joint time-domain fits of the base model and the base plus a set of effects.
 
 The residual vector stacks, each divided by its channel's noise level (estimated from the
-data, never from a truth file): the start-up currents ``i_alpha``, ``i_beta`` and speed, and
-the free-motion part of the stop record (closed-form free motion from the measured speed at
-its start). Parameters: ``Rs, Ls, Le, Rr, J, fv`` (+ ``fc`` with the case-2 base), then the
-augmentation's extra parameters. All fits are local (trust-region least squares from the
-base identification), in coordinates normalised to their bounds.
+data, never from a truth file, :mod:`.noise`): the start-up currents ``i_alpha``, ``i_beta``,
+the speed (left out when the record has no speed sensor: an all-NaN channel) and the
+free-motion part of the stop record (closed-form free motion from the measured speed at its
+start). Parameters: ``Rs, Ls, Le, Rr, J, fv, fc`` (``J`` when not known; ``fc`` with the
+case-2 base), then each chosen effect's extra parameters in order. The model applies every
+effect's ``augment`` to the extended-model rows in turn, runs the kernel, then every effect's
+``measure`` (an output transform of the simulated ``(n, 3, N)`` [i_alpha, i_beta, speed]) in
+turn. All fits are local (trust-region least squares with a forward-difference Jacobian
+batched through the kernel), in coordinates normalised to their bounds.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import optimize
 
 from benchmark.core.effects import Effect, EffectContext
-from benchmark.core.polish import least_squares_batch
+from benchmark.core.uncertainty import NoiseEstimate, hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.extended import base_rows, simulate_extended_batch, valid_rows
+from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
+from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
 from benchmark.problems.timedomain.simulation import hold_is_linear
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
+DIVERGED = 1e6
 
 
-def noise_level(x: np.ndarray, floor: float) -> float:
-    """White-noise standard deviation of a sampled signal from its fourth differences (they
-    suppress a smooth signal by (w Ts)^4 and are robust, through the median, to the few kinks
-    of switched waveforms), at least the quantisation step / sqrt(12) when the values are
-    quantised, and at least ``floor``."""
-    x = np.asarray(x, float)
-    d4 = np.diff(x, 4)
-    sigma = 1.4826 * float(np.median(np.abs(d4 - np.median(d4)))) / np.sqrt(70.0)
-    steps = np.abs(np.diff(x))
-    steps = steps[steps > 0]
-    if len(steps) > 10:
-        q = float(np.min(steps))
-        on_grid = np.abs(x / q - np.round(x / q)) < 1e-6
-        if np.mean(on_grid) > 0.99:
-            sigma = max(sigma, q / np.sqrt(12.0))
-    return max(sigma, floor)
+def supply_frequency_of(t, v_alpha, v_beta) -> float:
+    """Supply frequency (Hz) from the voltage phasor's phase over the last fifth of the record."""
+    n = len(t)
+    tail = slice(int(0.8 * n), n)
+    phase = np.unwrap(np.angle((v_alpha + 1j * v_beta)[tail]))
+    return abs(float(np.polyfit(t[tail], phase, 1)[0])) / (2 * math.pi)
 
 
 @dataclass
@@ -50,116 +49,160 @@ class DiagnosisData:
     t: np.ndarray
     v_alpha: np.ndarray
     v_beta: np.ndarray
-    meas: np.ndarray  # (3, N): i_alpha, i_beta, speed
+    meas: np.ndarray  # (3, N): i_alpha, i_beta, speed (speed NaN when not measured)
     sample_time: float
     linear: bool
     pole_pairs: int
     stop_t: np.ndarray | None  # from the start of the free motion, s
     stop_speed: np.ndarray | None
     stop_w0: float | None
-    sigma: dict  # channel -> noise level
+    noise: dict  # channel -> NoiseEstimate
     inertia: float | None
     dc_link_voltage: float | None
+    input_hold: str
+    supply_frequency: float
 
     @classmethod
     def from_dataset(cls, ds: StartupDataset) -> DiagnosisData:
         r = ds.startups[0]
-        meas = np.stack([r.i_alpha, r.i_beta, r.speed])
-        i_peak = float(np.max(np.abs(meas[:2])))
-        sigma = {
-            "i_alpha": noise_level(r.i_alpha, 1e-4 * i_peak),
-            "i_beta": noise_level(r.i_beta, 1e-4 * i_peak),
-            "speed": noise_level(r.speed, 1e-4 * float(np.max(np.abs(r.speed)))),
-        }
+        speed = np.asarray(r.speed, float)
+        has_speed = bool(np.all(np.isfinite(speed)))
+        meas = np.stack([r.i_alpha, r.i_beta, speed])
+        f_supply = ds.supply_frequency or supply_frequency_of(r.t, r.v_alpha, r.v_beta)
+        noise = startup_noise(r.t, r.v_alpha, r.v_beta, r.i_alpha, r.i_beta, speed if has_speed else None,
+                              float(f_supply), frequency_known=bool(ds.supply_frequency))
         stop_t = stop_speed = w0 = None
         if ds.stops:
             st = ds.stops[0]
             dt = float(np.median(np.diff(st.t)))
-            k0 = free_motion_start(st.t, zero_phase_lowpass(st.speed, dt))
             ws = zero_phase_lowpass(st.speed, dt)
+            k0 = free_motion_start(st.t, ws)
             moving = np.flatnonzero(ws[k0:] > 0.02 * ws[k0]) + k0
             k1 = moving[-1] + 1 if len(moving) else len(ws)
             stop_t = st.t[k0:k1] - st.t[k0]
             stop_speed = st.speed[k0:k1]
             w0 = float(ws[k0])
-            sigma["stop_speed"] = noise_level(st.speed[k0:k1], 1e-4 * max(w0, 1e-9))
+            noise["stop_speed"] = stop_noise(stop_speed, w0)
         return cls(t=r.t, v_alpha=np.ascontiguousarray(r.v_alpha), v_beta=np.ascontiguousarray(r.v_beta),
                    meas=meas, sample_time=ds.sample_time, linear=hold_is_linear(ds.input_hold),
-                   pole_pairs=ds.pole_pairs, stop_t=stop_t, stop_speed=stop_speed, stop_w0=w0, sigma=sigma,
-                   inertia=ds.inertia, dc_link_voltage=ds.dc_link_voltage)
+                   pole_pairs=ds.pole_pairs, stop_t=stop_t, stop_speed=stop_speed, stop_w0=w0, noise=noise,
+                   inertia=ds.inertia, dc_link_voltage=ds.dc_link_voltage, input_hold=str(ds.input_hold),
+                   supply_frequency=float(f_supply))
+
+    @property
+    def has_speed(self) -> bool:
+        return "speed" in self.noise
+
+    @property
+    def sigma(self) -> dict[str, float]:
+        return {k: float(v.std) for k, v in self.noise.items()}
 
     @property
     def n_startup(self) -> int:
         return len(self.t)
 
+    def startup_channels(self) -> list[int]:
+        """Rows of the simulated (3, N) output that are measured."""
+        return [0, 1, 2] if self.has_speed else [0, 1]
+
     def channel_slices(self) -> dict[str, slice]:
         n = self.n_startup
-        out = {"i_alpha": slice(0, n), "i_beta": slice(n, 2 * n), "speed": slice(2 * n, 3 * n)}
+        out = {}
+        for k, ch in enumerate(c for c in ("i_alpha", "i_beta", "speed") if c in self.noise):
+            out[ch] = slice(k * n, (k + 1) * n)
         if self.stop_t is not None:
-            out["stop_speed"] = slice(3 * n, 3 * n + len(self.stop_t))
+            m = len(out) * n
+            out["stop_speed"] = slice(m, m + len(self.stop_t))
         return out
 
     @property
     def n_residuals(self) -> int:
-        return 3 * self.n_startup + (0 if self.stop_t is None else len(self.stop_t))
+        return len(self.startup_channels()) * self.n_startup + (0 if self.stop_t is None else len(self.stop_t))
+
+    def channel_labels(self) -> np.ndarray:
+        lab = np.empty(self.n_residuals, dtype=int)
+        for k, s in enumerate(self.channel_slices().values()):
+            lab[s] = k
+        return lab
 
     def time_of_residuals(self) -> np.ndarray:
         """Time of each residual element (start-up channels: their sample time; stop: the
         start-up's end plus the time into the free motion)."""
-        parts = [self.t, self.t, self.t]
+        parts = [self.t] * len(self.startup_channels())
         if self.stop_t is not None:
             parts.append(self.t[-1] + self.stop_t)
         return np.concatenate(parts)
 
-    def folds(self, supply_frequency: float) -> tuple[np.ndarray, np.ndarray]:
+    def folds(self) -> tuple[np.ndarray, np.ndarray]:
         """Two interleaved folds of blocks (two supply periods of the start-up, one second of
         the stop): each fold is a held-out set for a fit on the other."""
-        block = 2.0 / supply_frequency
-        kA = (np.floor(self.t / block).astype(int) % 2) == 0
-        parts = [kA, kA, kA]
+        block = 2.0 / self.supply_frequency
+        kA = (np.floor((self.t - self.t[0]) / block).astype(int) % 2) == 0
+        parts = [kA] * len(self.startup_channels())
         if self.stop_t is not None:
             parts.append((np.floor(self.stop_t / 1.0).astype(int) % 2) == 0)
         a = np.concatenate(parts)
         return a, ~a
 
+    def facts(self, base_case: int) -> dict:
+        """What the experiment says about itself: which effects can occur in it."""
+        return {"input_hold": self.input_hold, "dc_link_voltage": self.dc_link_voltage,
+                "supply_frequency": self.supply_frequency, "has_speed": self.has_speed,
+                "has_stop": self.stop_t is not None, "base_case": int(base_case)}
+
 
 class JointModel:
-    """Base (+ one effect) model with the joint residual of :class:`DiagnosisData`."""
+    """Base model (+ a list of effects) with the joint residual of :class:`DiagnosisData`."""
 
-    def __init__(self, data: DiagnosisData, base_case: int, effect: Effect | None, ctx: EffectContext,
-                 centre: dict[str, float]):
+    def __init__(self, data: DiagnosisData, base_case: int, effects: list[Effect] | tuple, ctx: EffectContext,
+                 centre: dict[str, float], fc_scale: float):
         self.data = data
-        self.effect = effect
+        self.effects = list(effects)
         self.ctx = ctx
         self.base_case = base_case
         names = ["Rs", "Ls", "Le", "Rr"] + (["J"] if data.inertia is None else []) + ["fv"]
         if base_case == 2:
             names.append("fc")
         self.base_names = tuple(names)
-        extra = tuple(effect.extra_names) if effect else ()
-        self.names = self.base_names + extra
+        self.slices = []
+        k = len(self.base_names)
+        extra = []
+        for eff in self.effects:
+            m = len(eff.extra_names)
+            self.slices.append(slice(k, k + m))
+            extra += [f"{eff.name}.{n}" for n in eff.extra_names]
+            k += m
+        self.names = self.base_names + tuple(extra)
         c = np.array([centre[n] for n in self.base_names])
-        lo = 0.5 * c
-        hi = 2.0 * c
-        for k, n in enumerate(self.base_names):
-            if n in ("fv", "fc"):
-                lo[k], hi[k] = 0.1 * c[k], 5.0 * c[k] + 1e-9
-        if effect:
-            elo, ehi = effect.extra_bounds(ctx)
+        lo, hi = 0.5 * c, 2.0 * c
+        for j, n in enumerate(self.base_names):
+            if n == "fv":
+                lo[j], hi[j] = 0.1 * c[j], 5.0 * c[j] + 1e-9
+            if n == "fc":
+                lo[j], hi[j] = 0.0, 5.0 * c[j] + fc_scale
+        for eff in self.effects:
+            elo, ehi = eff.extra_bounds(ctx)
             lo, hi = np.concatenate([lo, elo]), np.concatenate([hi, ehi])
         self.lower, self.upper = lo, hi
-        sig = data.sigma
-        w = [np.full(data.n_startup, 1.0 / sig[k]) for k in ("i_alpha", "i_beta", "speed")]
-        if data.stop_t is not None:
-            w.append(np.full(len(data.stop_t), 1.0 / sig["stop_speed"]))
-        self.weight = np.concatenate(w)
-        meas = [data.meas[0], data.meas[1], data.meas[2]]
+        sl = data.channel_slices()
+        w = np.empty(data.n_residuals)
+        for ch, s in sl.items():
+            w[s] = 1.0 / data.noise[ch].std
+        self.weight = w
+        meas = [data.meas[k] for k in data.startup_channels()]
         if data.stop_t is not None:
             meas.append(data.stop_speed)
         self.measured = np.concatenate(meas)
+        self._rows_out = data.startup_channels()
+        pairs = list(zip(self.effects, self.slices, strict=True))
+        self._measure_order = sorted(pairs, key=lambda p: getattr(p[0], "measure_stage", 0))
+
+    @property
+    def effect_names(self) -> list[str]:
+        return [e.name for e in self.effects]
 
     def full_parameters(self, X: np.ndarray) -> np.ndarray:
-        col = {n: X[:, k] for k, n in enumerate(self.names)}
+        col = {n: X[:, k] for k, n in enumerate(self.base_names)}
         J = col["J"] if "J" in col else np.full(len(X), self.data.inertia)
         fc = col["fc"] if "fc" in col else np.zeros(len(X))
         return np.column_stack([col["Rs"], col["Ls"], col["Le"], col["Rr"], J, col["fv"], fc])
@@ -167,8 +210,9 @@ class JointModel:
     def rows(self, X: np.ndarray) -> np.ndarray:
         X = np.atleast_2d(X)
         rows = base_rows(self.full_parameters(X), self.data.pole_pairs)
-        if self.effect is not None:
-            rows = self.effect.augment(rows, X[:, len(self.base_names):], self.ctx)
+        for eff, s in zip(self.effects, self.slices, strict=True):
+            rows = eff.augment(rows, X[:, s], self.ctx)
+        rows = np.array(rows, dtype=float)
         rows[~valid_rows(rows)] = np.nan
         return np.ascontiguousarray(rows)
 
@@ -178,36 +222,100 @@ class JointModel:
         rows = self.rows(X)
         d = self.data
         sim = simulate_extended_batch(rows, d.v_alpha, d.v_beta, d.linear, d.sample_time, 1)
-        parts = [sim.reshape(len(X), -1)]
+        for eff, s in self._measure_order:
+            measure = getattr(eff, "measure", None)
+            if measure is not None:
+                sim = measure(sim, X[:, s], self.ctx)
+        parts = [np.asarray(sim)[:, self._rows_out, :].reshape(len(X), -1)]
         if d.stop_t is not None:
-            theta = self.full_parameters(X)
-            J, fv, fc = theta[:, 4:5], theta[:, 5:6], theta[:, 6:7]
-            rows_fc = rows[:, [19]]  # an effect may set fc (Coulomb augmentation)
-            fc = np.where(np.isfinite(rows_fc), rows_fc, fc)
-            with np.errstate(all="ignore"):
-                tau = J / fv
-                c = fc / J
-                free = (d.stop_w0 + tau * c) * np.exp(-d.stop_t[None, :] / tau) - tau * c
-            parts.append(np.maximum(free, 0.0))
+            parts.append(self.free_stop(X, rows))
         return np.concatenate(parts, axis=1)
 
+    def free_stop(self, X: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Speed of the free stop from the measured speed at its start: ``J dw/dt = -(A + B w + C w^2)``
+        with ``A`` Coulomb friction plus the passive load torques (constant, and a step load that
+        came on during the start-up), ``B = fv``, ``C`` a fan load over ``w_ref^2``; closed form
+        (a tangent, or hyperbolic tangent, of time; the exponential when ``C = 0``); the shaft
+        stays at rest once stopped (passive torques hold it)."""
+        d = self.data
+        theta = self.full_parameters(X)
+        J, fv = theta[:, 4:5], theta[:, 5:6]
+        col = {k: rows[:, [IDX[k]]] if k in IDX else np.zeros((len(X), 1))
+               for k in ("fc", "T_L", "T_q", "w_ref", "T_s", "t_step")}
+        fc = np.where(np.isfinite(col["fc"]), col["fc"], theta[:, 6:7])  # an effect may set fc
+        step_on = (col["t_step"] < d.t[-1]).astype(float)
+        A = fc + col["T_L"] + col["T_s"] * step_on
+        with np.errstate(all="ignore"):
+            C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
+        t = d.stop_t[None, :]
+        w0 = d.stop_w0
+        with np.errstate(all="ignore"):
+            tau = J / fv
+            c = A / J
+            linear = (w0 + tau * c) * np.exp(-t / tau) - tau * c
+            q = np.sqrt((4 * A * C - fv**2).astype(complex))
+            Cs = np.where(C > 0, C, 1.0)
+            phi0 = np.arctan((2 * Cs * w0 + fv) / q)
+            quad = np.real((-fv + q * np.tan(phi0 - q * t / (2 * J))) / (2 * Cs))
+            w = np.where(C > 1e-15, quad, linear)
+            stopped = np.cumsum(~(w > 0), axis=1) > 0
+        return np.where(stopped, 0.0, w)
+
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        r = (self.measured[None, :] - self.simulate(X)) * self.weight[None, :]
-        return np.where(np.isfinite(r), r, 1e6)
+        with np.errstate(all="ignore"):
+            r = (self.measured[None, :] - self.simulate(X)) * self.weight[None, :]
+        return np.where(np.isfinite(r), r, DIVERGED)
 
-    def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_evaluations: int = 400) -> np.ndarray:
+    def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_iterations: int = 12,
+            tol: float = 1e-5) -> np.ndarray:
+        """Local least squares from ``x0`` on the residuals in ``mask`` (all when None)."""
         sel = slice(None) if mask is None else mask
+        lo, hi = self.lower, self.upper
+        span = np.where(hi > lo, hi - lo, 1.0)
+        cache: dict = {}
 
-        def res(X):
-            return self.residuals(X)[:, sel]
+        def to_x(u):
+            return lo + np.clip(u, 0.0, 1.0) * span
 
-        x, _ = least_squares_batch(res, np.clip(x0, self.lower, self.upper), self.lower, self.upper,
-                                   max_evaluations, rel_step=1e-6)
-        return x
+        def fun(u):
+            r = self.residuals(to_x(u)[None, :])[0][sel]
+            cache["u"], cache["r"] = u.copy(), r
+            return r
+
+        def jac(u):
+            r0 = cache["r"] if "u" in cache and np.array_equal(cache["u"], u) else fun(u)
+            h = 1e-6 * np.maximum(np.abs(u), 1e-3)
+            h = np.where(u + h > 1.0, -h, h)
+            R = self.residuals(to_x(u[None, :] + np.diag(h)))[:, sel]
+            return ((R - r0[None, :]) / h[:, None]).T
+
+        u0 = np.clip((np.clip(x0, lo, hi) - lo) / span, 0.0, 1.0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sol = optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale="jac",
+                                         xtol=tol, ftol=tol, gtol=1e-8, max_nfev=max_iterations)
+        return to_x(sol.x)
 
     def ssr(self, x: np.ndarray, mask: np.ndarray | None = None) -> float:
         r = self.residuals(np.atleast_2d(x))[0]
         return float(np.sum(r[mask] ** 2) if mask is not None else np.sum(r**2))
+
+    def standard_errors(self, x: np.ndarray) -> np.ndarray:
+        """Standard errors of ``x`` (a fit on all residuals) from the coloured-residual
+        (HAC) sandwich covariance."""
+        x = np.asarray(x, float)
+        h = 1e-6 * np.maximum(np.abs(x), 1e-9 + 1e-6 * (self.upper - self.lower))
+        X = x[None, :] + np.diag(h)
+        r0 = self.residuals(x[None, :])[0]
+        R = self.residuals(X)
+        J = -((R - r0[None, :]) / h[:, None]).T  # d(model/sigma)/dx (sign does not matter)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                cov = hac_covariance(J, r0, groups=self.data.channel_labels(), aligned=False)
+            except (ValueError, np.linalg.LinAlgError):
+                return np.full(len(x), np.nan)
+        return standard_errors(cov)
 
 
 def stop_mechanics(data: DiagnosisData, case: int):
@@ -215,3 +323,7 @@ def stop_mechanics(data: DiagnosisData, case: int):
     if data.stop_t is None:
         return None
     return fit_free_stop(data.stop_t, data.stop_speed, case=case, filter_speed=True)
+
+
+def unit_noise(u: float, n_eff: float) -> NoiseEstimate:
+    return NoiseEstimate(1.0, float(u), float(n_eff), "channels normalised by their own noise")

@@ -1,17 +1,43 @@
 """Sim-to-real gap diagnosis for the time-domain problem.
 
-1. Identify the base model (the configured optimiser on the eq. 13-15 cost, then polish).
-2. Refit it jointly (start-up currents and speed, free-motion stop), each channel divided by
-   its noise level estimated from the data, on two interleaved folds of blocks.
-3. Localise the gap: share of residual energy by channel and by segment (electrical start,
-   acceleration, steady state, free stop), and the current residual's spectrum in harmonic
-   orders of the supply.
-4. Fit every candidate augmentation (base + one effect) from the base fit on each fold and
-   score it on the other fold (held-out reduction of the misfit), in sample, and by an
-   information criterion (``delta chi^2 + k ln n``, the noise level being known).
-5. Verdict: the candidate with the largest held-out reduction among those that earn their
-   parameters (criterion below ``max_criterion`` and held-out reduction above
-   ``min_heldout_reduction``); otherwise ``none``.
+1. Identify the base model: the paper's full model (the configured optimiser on the eq. 13-15
+   cost, then polish) with the case-2 mechanical pre-identification (Coulomb and viscous
+   friction) from the stop record; without one, ``fv`` and ``fc`` are searched.
+   ``diagnosis.base_case=1`` drops Coulomb friction from the base (``coulomb_friction`` is
+   then a candidate).
+2. Noise of every channel from the data, with its own uncertainty (:mod:`.noise`).
+3. Refit the base jointly (start-up currents and speed, free-motion stop), each channel
+   divided by its noise, on two interleaved folds of blocks; the held-out residual (each
+   fold predicted by the fit on the other) is the gap.
+4. Screen the candidates by the experiment's facts (``Effect.applies_to``; inverter effects
+   need ``dc_link_voltage`` or ``input_hold: zoh``...).
+5. Forward selection on the held-out folds (:func:`forward_selection`): add the candidate
+   with the largest held-out reduction, refit base + all chosen effects jointly, repeat
+   while the next one earns its parameters.
+6. Verdict (:func:`verdict_of`) with the statuses below, each chosen effect's drop-one
+   share, fitted parameters and standard errors, candidates that leave the same signature,
+   and where in time the excess lies.
+
+Numbers of the contract (``DiagnosisSettings``; the same band as the fit-quality verdict of
+:func:`benchmark.core.uncertainty.misfit_ratio`):
+
+* the held-out RMS over noise ``rho`` (1 = noise alone) is *at the noise level* when it lies
+  in ``misfit_ratio``'s band ``1 +- (2 u + 0.05)``, ``u`` the one-sigma relative
+  uncertainty of the ratio (the noise estimate's and the residual's own, with its AR(1)
+  coefficient);
+* ``no_gap``: the base model's held-out ``rho`` is at (or below) the noise level;
+* ``explained``: effects were chosen and what is left is at the noise level, or they remove
+  at least ``explained_share`` (90 %) of the excess held-out misfit ``rho^2 - 1``;
+* ``partly_explained``: effects were chosen and remove at least ``partly_share`` (30 %);
+* ``unexplained``: a gap that no candidate set removes 30 % of (verdict ``unexplained``).
+
+A candidate earns its place when (all three): it removes at least ``min_excess_reduction``
+(15 %) of the current excess held-out misfit; that drop exceeds ``min_band_drop`` (half) of
+the noise band ``(1 + 2u + 0.05)^2 - 1`` in chi^2 per residual; and the information
+criterion ``n_eff ln(SSR_new / SSR_old) + k ln n_eff`` is negative, ``n_eff`` the effective
+sample count of the in-sample residual (``n (1 - phi)/(1 + phi)`` per channel, ``phi`` its
+AR(1) coefficient), so a smooth model error that correlates thousands of samples does not let
+every extra parameter in.
 
 It never reads ``truth.yaml``: the data set is loaded by :func:`load_startup_dataset`,
 which reads only ``meta.yaml`` and the record tables.
@@ -26,156 +52,393 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmark.core.effects import Effect, effect_context
+from benchmark.core.uncertainty import _phi, misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
+from benchmark.problems.timedomain.diagnosis.noise import combined
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
 HARMONIC_ORDERS = (-11, -7, -5, -1, 1, 5, 7, 11, 13)
+STATUSES = ("no_gap", "explained", "partly_explained", "unexplained")
+#: Inverter-only effects when an effect does not say itself (``applies_to``).
+INVERTER_EFFECTS = ("inverter_drop",)
+SPEED_SENSOR_EFFECTS = ("speed_sensor_gain",)
 
 
 @dataclass
 class DiagnosisSettings:
-    """Knobs of the diagnosis (``conf/diagnose.yaml``, key ``diagnosis``).
+    """Knobs of the diagnosis (``conf/diagnose.yaml``, key ``diagnosis``); see the module
+    docstring for what the numbers mean.
 
-    base_case : 1 (no Coulomb friction; ``coulomb_friction`` is then a candidate) or 2.
-    min_gap : optional gate, base chi^2 per residual above which a gap is declared (1 = noise
-        alone). Off by default: the noise levels estimated from the data are only good to about
-        10 %, so the candidates' own evidence decides.
-    min_heldout_reduction : share of the held-out misfit a candidate must remove.
-    max_criterion : a candidate earns its parameters when ``delta chi^2 + k ln n`` is below this.
-    fit_evaluations : evaluation limit of each local fit.
+    base_case : 2 (the paper's full model, Coulomb + viscous friction) or 1 (no Coulomb
+        friction; ``coulomb_friction`` is then a candidate).
+    min_excess_reduction : share of the current excess held-out misfit a new effect must remove.
+    min_band_drop : that drop must also exceed this fraction of the noise band (chi^2 units).
+    explained_share, partly_share : shares of the excess separating the statuses.
+    max_effects : at most this many effects are chosen.
+    indistinguishable_margin : a candidate whose held-out excess reduction in the round an
+        effect was chosen is within this of the chosen one's is reported as indistinguishable.
+    fit_iterations : trust-region iterations of each local fit.
+    screen_keep, screen_iterations : in every round with more remaining candidates than
+        ``screen_keep``, each is first fitted cheaply with the chosen ones (fold A,
+        ``screen_iterations``, scored on fold B) and only the best ``screen_keep`` are fitted fully.
+    band_k, band_floor : ``misfit_ratio``'s k and bias floor.
     """
 
-    base_case: int = 1
-    min_gap: float = 0.0
-    min_heldout_reduction: float = 0.02
-    max_criterion: float = -10.0
-    fit_evaluations: int = 400
+    base_case: int = 2
+    min_excess_reduction: float = 0.15
+    min_band_drop: float = 0.5
+    explained_share: float = 0.9
+    partly_share: float = 0.3
+    max_effects: int = 3
+    indistinguishable_margin: float = 0.03
+    fit_iterations: int = 12
+    screen_keep: int = 6
+    screen_iterations: int = 6
+    band_k: float = 2.0
+    band_floor: float = 0.05
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
-    return effect_context(data.t, data.v_alpha, data.v_beta, data.meas[0], data.meas[1], data.meas[2],
+    return effect_context(data.t, data.v_alpha, data.v_beta, data.meas[0], data.meas[1],
+                          data.meas[2] if data.has_speed else None,
                           data.pole_pairs, estimate["J"], estimate["Ls"] - estimate["Le"], estimate["Le"],
                           dc_link_voltage)
 
 
-def segment_masks(data: DiagnosisData, supply_frequency: float) -> dict[str, np.ndarray]:
+def screen(effects: dict[str, Effect], facts: dict) -> tuple[list[Effect], list[dict]]:
+    """The candidates the experiment allows, and those excluded with the reason."""
+    keep, excluded = [], []
+    for name, eff in effects.items():
+        reason = None
+        if name == "coulomb_friction" and facts["base_case"] == 2:
+            reason = "Coulomb friction is in the case-2 base model (diagnosis.base_case=1 makes it a candidate)"
+        applies = getattr(eff, "applies_to", None)
+        if reason is None and applies is not None:
+            reason = applies(dict(facts))
+        if reason is None:  # the experiment's facts, also for effects that do not say themselves
+            inverter = facts.get("dc_link_voltage") or facts.get("input_hold") == "zoh"
+            if name in INVERTER_EFFECTS and not inverter:
+                reason = "needs an inverter-fed start (dc_link_voltage or input_hold: zoh in meta.yaml)"
+            if name in SPEED_SENSOR_EFFECTS and not facts.get("has_speed"):
+                reason = "the record has no speed sensor"
+        if reason:
+            excluded.append({"effect": name, "reason": str(reason)})
+        else:
+            keep.append(eff)
+    return keep, excluded
+
+
+def segment_masks(data: DiagnosisData) -> dict[str, np.ndarray]:
     """Masks over the residual vector for the four segments of the experiment."""
     n = data.n_startup
-    w = data.meas[2]
-    final = float(np.mean(w[int(0.9 * n):]))
-    reached = np.flatnonzero(w >= 0.98 * final)
-    t_acc = data.t[reached[0]] if len(reached) else data.t[-1]
-    t_el = min(3.0 / supply_frequency, t_acc)
+    if data.has_speed:
+        w = data.meas[2]
+        final = float(np.mean(w[int(0.9 * n):]))
+        reached = np.flatnonzero(w >= 0.98 * final)
+        t_acc = data.t[reached[0]] if len(reached) else data.t[-1]
+    else:
+        t_acc = data.t[int(0.6 * n)]
+    t_el = min(data.t[0] + 3.0 / data.supply_frequency, t_acc)
     seg = np.where(data.t < t_el, 0, np.where(data.t < t_acc, 1, 2))
-    seg_all = np.concatenate([seg, seg, seg] + ([np.full(len(data.stop_t), 3)] if data.stop_t is not None else []))
+    parts = [seg] * len(data.startup_channels())
+    if data.stop_t is not None:
+        parts.append(np.full(len(data.stop_t), 3))
+    seg_all = np.concatenate(parts)
     return {name: seg_all == k for k, name in enumerate(SEGMENTS)}
 
 
-def localise(model: JointModel, x: np.ndarray, supply_frequency: float) -> dict:
-    """Where the misfit of ``x`` lies: shares of the residual energy and the spectrum."""
-    r = model.residuals(np.atleast_2d(x))[0]
+def localise(data: DiagnosisData, r: np.ndarray, band_hi: float) -> dict:
+    """Where the residual ``r`` (noise-normalised) lies: shares by channel and segment, the
+    current residual's harmonics, and the time windows of the excess (where its smoothed
+    square, over one supply period, exceeds the noise band)."""
     e = r**2
     total = float(e.sum()) or 1.0
-    data = model.data
     by_channel = {ch: float(e[s].sum() / total) for ch, s in data.channel_slices().items()}
-    segs = segment_masks(data, supply_frequency)
+    segs = segment_masks(data)
     by_segment = {k: float(e[m].sum() / total) for k, m in segs.items()}
     n = data.n_startup
     ss = segs["steady_state"][:n]
+    sl = data.channel_slices()
     spectrum = {}
     if ss.sum() > 64:
-        # current residual as a complex phasor sequence over the steady state: positive
-        # orders rotate with the supply, negative against it
-        res_i = (r[:n] * data.sigma["i_alpha"] + 1j * r[n:2 * n] * data.sigma["i_beta"])[ss]
+        res_i = (r[sl["i_alpha"]] * data.sigma["i_alpha"] + 1j * r[sl["i_beta"]] * data.sigma["i_beta"])[ss]
         tt = data.t[ss]
         for h in HARMONIC_ORDERS:
-            spectrum[str(h)] = float(abs(np.mean(res_i * np.exp(-1j * 2 * np.pi * h * supply_frequency * tt))))
-    chi2 = float(e.sum() / len(e))
-    return {"chi2_per_residual": chi2, "by_channel": by_channel, "by_segment": by_segment,
-            "current_residual_harmonics_A": spectrum}
+            spectrum[str(h)] = float(abs(np.mean(res_i * np.exp(-1j * 2 * np.pi * h * data.supply_frequency * tt))))
+    # time windows of the excess over the start-up
+    chans = [s for ch, s in sl.items() if ch != "stop_speed"]
+    et = np.mean([e[s] for s in chans], axis=0)
+    period = max(int(round(1.0 / (data.supply_frequency * data.sample_time))), 1)
+    smooth = np.convolve(et, np.ones(period) / period, mode="same")
+    above = smooth > band_hi**2
+    windows = []
+    if above.any():
+        idx = np.flatnonzero(above)
+        cuts = np.flatnonzero(np.diff(idx) > period) + 1
+        for run in np.split(idx, cuts):
+            if len(run) < period // 2:
+                continue
+            excess = float(np.sum(smooth[run] - 1.0))
+            windows.append({"start_s": float(data.t[run[0]]), "end_s": float(data.t[run[-1]]),
+                            "excess_share": excess})
+        tot = sum(w["excess_share"] for w in windows) or 1.0
+        for w in windows:
+            w["excess_share"] = w["excess_share"] / tot
+        windows.sort(key=lambda w: -w["excess_share"])
+    stop = None
+    if "stop_speed" in sl:
+        es = e[sl["stop_speed"]]
+        stop = {"chi2_per_residual": float(np.mean(es)), "above_band": bool(np.mean(es) > band_hi**2)}
+    main = windows[0] if windows else None
+    text = (f"the excess starts at t = {main['start_s']:.3g} s and ends at {main['end_s']:.3g} s "
+            f"({100 * main['excess_share']:.0f} % of the start-up's excess)" if main else
+            "no part of the start-up exceeds the noise band")
+    if stop and stop["above_band"]:
+        text += "; the free stop exceeds it too"
+    return {"chi2_per_residual": float(e.sum() / len(e)), "by_channel": by_channel, "by_segment": by_segment,
+            "current_residual_harmonics_A": spectrum, "excess_windows": windows[:5], "excess_window": main,
+            "stop_record": stop, "summary": text}
+
+
+def effective_samples(data: DiagnosisData, r: np.ndarray, mask: np.ndarray | None = None) -> float:
+    """Effective number of independent residuals: ``n (1 - phi)/(1 + phi)`` per channel."""
+    total = 0.0
+    for s in data.channel_slices().values():
+        x = r[s] if mask is None else r[s][mask[s]]
+        if len(x) < 3:
+            continue
+        phi = _phi(x - x.mean())
+        total += len(x) * (1 - phi) / (1 + phi)
+    return max(total, 2.0)
+
+
+class SetFit:
+    """Fold fits of the base plus one set of effects, and their held-out residual."""
+
+    def __init__(self, model: JointModel, xs: dict, masks: dict):
+        self.model = model
+        self.xs = xs
+        n = model.data.n_residuals
+        self.held = np.empty(n)
+        self.ssr_in = 0.0
+        r_in = np.empty(n)
+        for f, other in (("A", "B"), ("B", "A")):
+            r = model.residuals(xs[f][None, :])[0]
+            self.held[masks[other]] = r[masks[other]]
+            r_in[masks[f]] = r[masks[f]]
+            self.ssr_in += float(np.sum(r[masks[f]] ** 2))
+        self.r_in = r_in
+        self.chi2 = float(np.mean(self.held**2))
+
+    @property
+    def names(self) -> list[str]:
+        return self.model.effect_names
+
+
+def fit_set(data, settings, ctx, centre, fc_scale, effects, starts_from: SetFit, masks, drop: int | None = None):
+    """Fit base + ``effects`` on each fold, from ``starts_from``'s fold fits (plus the new
+    effect's starting values when one is added, or minus effect ``drop``'s parameters)."""
+    model = JointModel(data, settings.base_case, effects, ctx, centre, fc_scale)
+    prev = starts_from.model
+    xs = {}
+    for f in ("A", "B"):
+        x_prev = starts_from.xs[f]
+        if drop is not None:
+            keep = np.ones(len(x_prev), bool)
+            keep[prev.slices[drop]] = False
+            starts = [x_prev[keep]]
+        elif len(effects) > len(prev.effects):
+            new = effects[-1]
+            starts = [np.concatenate([x_prev, s]) for s in new.extra_starts(ctx)]
+        else:
+            starts = [x_prev]
+        best, best_ssr = None, np.inf
+        for x0 in starts:
+            x = model.fit(x0, masks[f], settings.fit_iterations)
+            s = model.ssr(x, masks[f])
+            if s < best_ssr:
+                best, best_ssr = x, s
+        xs[f] = best
+    return SetFit(model, xs, masks)
+
+
+def prescreen(data, settings, ctx, centre, fc_scale, chosen, candidates, cur: SetFit, masks, progress=None):
+    """A cheap look at every remaining candidate: base + the chosen effects + it, fitted on
+    fold A only (its first starting values, ``screen_iterations``), scored on fold B. Returns
+    the candidates ordered by that held-out chi^2 and the table."""
+    rows = []
+    held_cur = float(np.mean(cur.model.residuals(cur.xs["A"][None, :])[0][masks["B"]] ** 2))
+    for eff in candidates:
+        if progress:
+            progress("screening " + " + ".join([e.name for e in chosen] + [eff.name]))
+        model = JointModel(data, settings.base_case, chosen + [eff], ctx, centre, fc_scale)
+        x0 = np.concatenate([cur.xs["A"], eff.extra_starts(ctx)[0]])
+        x = model.fit(x0, masks["A"], settings.screen_iterations)
+        chi2 = float(np.mean(model.residuals(x[None, :])[0][masks["B"]] ** 2))
+        rows.append({"effect": eff.name, "heldout_chi2_fold_B": chi2, "heldout_chi2_base_fold_B": held_cur})
+    order = np.argsort([r["heldout_chi2_fold_B"] for r in rows])
+    return [candidates[i] for i in order], [rows[i] for i in order]
+
+
+def forward_selection(data, settings, ctx, centre, fc_scale, candidates, base_fit: SetFit, masks, band,
+                      progress=None):
+    """Greedy forward selection on the held-out folds; returns (chosen SetFit, rounds).
+
+    Every round starts from all remaining candidates: with more than ``screen_keep`` of them, a
+    cheap screening from the current set keeps the best ``screen_keep`` (so an effect masked by
+    another one in the first round is looked at again once that one is in the model)."""
+    cur = base_fit
+    chosen: list[Effect] = []
+    rounds = []
+    band_chi2 = band**2 - 1.0
+    while len(chosen) < settings.max_effects:
+        pool = [e for e in candidates if e not in chosen]
+        if not pool or cur.chi2 <= band**2:
+            break
+        if len(pool) > settings.screen_keep:
+            pool, screened = prescreen(data, settings, ctx, centre, fc_scale, chosen, pool, cur, masks, progress)
+            pool = pool[:settings.screen_keep]
+            rounds.append({"round": 0, "from": [e.name for e in chosen], "screening": screened,
+                           "kept": [e.name for e in pool]})
+        trials = []
+        for eff in pool:
+            if progress:
+                progress(" + ".join([e.name for e in chosen] + [eff.name]))
+            trials.append((eff, fit_set(data, settings, ctx, centre, fc_scale, chosen + [eff], cur, masks)))
+        excess = cur.chi2 - 1.0
+        n_eff = effective_samples(data, cur.r_in)
+        rows = []
+        for eff, sf in trials:
+            k = len(eff.extra_names)
+            crit = n_eff * math.log(max(sf.ssr_in, 1e-300) / max(cur.ssr_in, 1e-300)) + k * math.log(n_eff)
+            red = (cur.chi2 - sf.chi2) / excess if excess > 0 else 0.0
+            rows.append({"effect": eff.name, "heldout_chi2": sf.chi2, "excess_reduction": float(red),
+                         "heldout_reduction": float(1 - sf.chi2 / cur.chi2), "criterion": float(crit),
+                         "earns": bool(red >= settings.min_excess_reduction
+                                       and cur.chi2 - sf.chi2 >= settings.min_band_drop * band_chi2
+                                       and crit < 0)})
+        order = np.argsort([r["heldout_chi2"] for r in rows])
+        rows = [rows[i] for i in order]
+        trials = [trials[i] for i in order]
+        best_row, (best_eff, best_sf) = rows[0], trials[0]
+        rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
+               "heldout_chi2_from": cur.chi2, "effective_samples": n_eff, "candidates": rows, "chosen": None,
+               "indistinguishable": []}
+        rounds.append(rnd)
+        if not best_row["earns"]:
+            break
+        rnd["chosen"] = best_eff.name
+        rnd["indistinguishable"] = [r["effect"] for r in rows[1:] if r["earns"] and best_row["excess_reduction"]
+                                    - r["excess_reduction"] <= settings.indistinguishable_margin]
+        chosen.append(best_eff)
+        cur = best_sf
+    return cur, rounds
+
+
+def verdict_of(settings: DiagnosisSettings, before, after, effects: list[str]) -> tuple[str, str, float]:
+    """(status, verdict, explained share) from the held-out fit qualities before/after."""
+    excess = before.ratio**2 - 1.0
+    share = 0.0
+    if effects and excess > 0:
+        share = float(np.clip((before.ratio**2 - after.ratio**2) / excess, 0.0, 1.0))
+    if before.ratio <= before.threshold:
+        return "no_gap", "none", 0.0
+    if effects and (after.ratio <= after.threshold or share >= settings.explained_share):
+        return "explained", "+".join(effects), share
+    if effects and share >= settings.partly_share:
+        return "partly_explained", "+".join(effects), share
+    return "unexplained", "unexplained", share
 
 
 def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[str, Effect],
              settings: DiagnosisSettings, progress=None) -> dict:
-    """Run steps 2-5 from a base estimate; returns the diagnosis document (no truth)."""
+    """Steps 2-6 from a base estimate; returns the diagnosis document (no truth)."""
     t0 = time.perf_counter()
     data = DiagnosisData.from_dataset(ds)
     ctx = base_context(data, base_estimate, ds.dc_link_voltage)
-    f_supply = ctx.w_e / (2 * math.pi)
-    fold_a, fold_b = data.folds(f_supply)
-    n_fit = min(int(fold_a.sum()), int(fold_b.sum()))
-    n_total = int(fold_a.sum() + fold_b.sum())
-
-    base = JointModel(data, settings.base_case, None, ctx, base_estimate)
-    x0 = np.array([base_estimate[n] for n in base.base_names])
-    base_full = base.fit(x0, None, settings.fit_evaluations)
-    base_fold = {"A": base.fit(base_full, fold_a, settings.fit_evaluations),
-                 "B": base.fit(base_full, fold_b, settings.fit_evaluations)}
+    fold_a, fold_b = data.folds()
     masks = {"A": fold_a, "B": fold_b}
-    other = {"A": "B", "B": "A"}
-    loc = localise(base, base_full, f_supply)
-    gap_in = loc["chi2_per_residual"]
+    fc_scale = 0.3 * base_estimate["fv"] * ctx.w_sync + 1e-9
+    centre = dict(base_estimate)
 
-    ranking = []
-    fitted = {}
-    candidates = [e for e in effects.values() if not (e.name == "coulomb_friction" and settings.base_case == 2)]
-    for eff in candidates:
-        if progress:
-            progress(eff.name)
-        model = JointModel(data, settings.base_case, eff, ctx, base_estimate)
-        held_base, held_aug, ins_base, ins_aug = 0.0, 0.0, 0.0, 0.0
-        xs = {}
-        for f in ("A", "B"):
-            best, best_ssr = None, np.inf
-            for start in eff.extra_starts(ctx):
-                x = model.fit(np.concatenate([base_fold[f], start]), masks[f], settings.fit_evaluations)
-                s = model.ssr(x, masks[f])
-                if s < best_ssr:
-                    best, best_ssr = x, s
-            xs[f] = best
-            ins_base += base.ssr(base_fold[f], masks[f])
-            ins_aug += best_ssr
-            held_base += base.ssr(base_fold[f], masks[other[f]])
-            held_aug += model.ssr(best, masks[other[f]])
-        k = len(eff.extra_names)
-        nb = len(model.base_names)
-        criterion = 0.5 * (ins_aug - ins_base) + k * math.log(n_fit)
-        ranking.append({
-            "effect": eff.name,
-            "heldout_reduction": float(1.0 - held_aug / held_base) if held_base > 0 else 0.0,
-            "in_sample_reduction": float(1.0 - ins_aug / ins_base) if ins_base > 0 else 0.0,
-            "criterion": float(criterion),
-            "heldout_chi2_before": float(held_base / n_total),
-            "heldout_chi2_after": float(held_aug / n_total),
-            "extra_parameters": {n: float(0.5 * (xs["A"][nb + j] + xs["B"][nb + j]))
-                                 for j, n in enumerate(eff.extra_names)},
+    base = JointModel(data, settings.base_case, [], ctx, centre, fc_scale)
+    x0 = np.array([centre[n] for n in base.base_names])
+    base_full = base.fit(x0, None, 2 * settings.fit_iterations)
+    base_fit = SetFit(base, {"A": base.fit(base_full, fold_a, settings.fit_iterations),
+                             "B": base.fit(base_full, fold_b, settings.fit_iterations)}, masks)
+    counts = {ch: s.stop - s.start for ch, s in data.channel_slices().items()}
+    noise_all = combined(data.noise, counts)
+
+    def quality(held):
+        return misfit_ratio(held, unit_noise(noise_all.rel_uncertainty, noise_all.n_effective),
+                            k=settings.band_k, bias_floor=settings.band_floor)
+
+    q_before = quality(base_fit.held)
+    facts = data.facts(settings.base_case)
+    candidates, excluded = screen(effects, facts)
+    if q_before.ratio > q_before.threshold:
+        final, rounds = forward_selection(data, settings, ctx, centre, fc_scale, candidates, base_fit, masks,
+                                          q_before.threshold, progress)
+    else:
+        final, rounds = base_fit, []
+    q_after = quality(final.held)
+    chosen = final.names
+    status, verdict, share = verdict_of(settings, q_before, q_after, chosen)
+
+    # each chosen effect's own share (drop-one) and its parameters with standard errors
+    per_effect = []
+    excess = q_before.ratio**2 - 1.0
+    full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.fit_iterations) if chosen else None
+    se = final.model.standard_errors(full_x) if chosen else None
+    for j, name in enumerate(chosen):
+        if len(chosen) == 1:
+            without = base_fit
+        else:
+            rest = [e for e in final.model.effects if e.name != name]
+            without = fit_set(data, settings, ctx, centre, fc_scale, rest, final, masks, drop=j)
+        own = (without.chi2 - final.chi2) / excess if excess > 0 else 0.0
+        s = final.model.slices[j]
+        per_effect.append({
+            "effect": name, "drop_one_share": float(own),
+            "parameters": {n.split(".", 1)[1]: {"value": float(full_x[k]), "standard_error": float(se[k])}
+                           for k, n in zip(range(s.start, s.stop), final.model.names[s], strict=True)},
         })
-        fitted[eff.name] = (model, xs)
-    ranking.sort(key=lambda r: -r["heldout_reduction"])
-    earned = [r for r in ranking
-              if r["criterion"] < settings.max_criterion and r["heldout_reduction"] >= settings.min_heldout_reduction]
-    verdict = "none"
-    if gap_in >= settings.min_gap and earned:
-        verdict = earned[0]["effect"]
-    held_before = sum(base.ssr(base_fold[f], masks[other[f]]) for f in "AB") / n_total
-    held_after = held_before
-    if verdict != "none":
-        held_after = next(r for r in ranking if r["effect"] == verdict)["heldout_chi2_after"]
+    indist = []
+    for rnd in rounds:
+        if rnd.get("chosen") and rnd["indistinguishable"]:
+            indist.append([rnd["chosen"]] + rnd["indistinguishable"])
+    weak = []
+    if status == "unexplained" and chosen:
+        weak = chosen
+        chosen = []
+    loc = localise(data, base_fit.held, q_before.threshold)
+    base_x = full_x[:len(base.base_names)] if full_x is not None else base_full
     doc = {
+        "status": status,
         "verdict": verdict,
-        "ranking": ranking,
+        "effects": chosen,
+        "explained_share": share,
+        "per_effect": per_effect if chosen else [],
+        "indistinguishable": indist,
+        "excluded": excluded,
+        "weak_effects": weak,
+        "gap_before": {"heldout_rms_over_noise": q_before.ratio, "heldout_chi2_per_residual": q_before.ratio**2,
+                       "noise_band": [q_before.lower, q_before.threshold], "at_noise_level": q_before.at_noise_level},
+        "gap_after": {"heldout_rms_over_noise": q_after.ratio, "heldout_chi2_per_residual": q_after.ratio**2,
+                      "noise_band": [q_after.lower, q_after.threshold], "at_noise_level": q_after.at_noise_level},
         "localisation": loc,
-        "gap_before": {"heldout_chi2_per_residual": held_before,
-                       "heldout_rms_over_noise": math.sqrt(held_before)},
-        "gap_after": {"heldout_chi2_per_residual": held_after,
-                      "heldout_rms_over_noise": math.sqrt(held_after)},
+        "selection": rounds,
+        "ranking": next((r["candidates"] for r in rounds if "candidates" in r), []),
         "base": {"case": settings.base_case,
-                 "estimate": dict(zip(base.base_names, map(float, base_full), strict=True)),
+                 "estimate": dict(zip(base.base_names, map(float, base_x), strict=True)),
                  "identification": base_estimate},
+        "noise": {ch: {"std": float(v.std), "rel_uncertainty": float(v.rel_uncertainty), "method": v.method}
+                  for ch, v in data.noise.items()},
         "noise_level": data.sigma,
-        "settings": settings.__dict__,
+        "facts": {k: v for k, v in facts.items()},
+        "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
-    doc["_models"] = {"base": (base, base_full), "fitted": fitted}
+    doc["_models"] = {"base": base_fit, "final": final, "full_x": full_x, "band": q_before.threshold}
     return doc

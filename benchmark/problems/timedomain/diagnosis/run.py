@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
@@ -54,13 +55,18 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
 def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify: Callable,
                   progress: Callable[[str], None] | None = None) -> dict:
     """Diagnose ``dataset`` and write the results into ``outdir``; returns the document."""
+    t0, c0 = time.perf_counter(), time.process_time()
     settings = diagnosis_settings(run)
     problem_settings = TimeDomainSettings.from_run(run)
     candidates = run.get("candidates")
     effects = load_effects("timedomain", list(candidates) if candidates else None)
     base = identify_base(problem_settings, dataset, settings.base_case, identify)
+    t_base = time.perf_counter() - t0
     doc = diagnose(dataset, base, effects, settings, progress=progress)
     models = doc.pop("_models")
+    doc["wall_time_s"] = time.perf_counter() - t0
+    doc["cpu_time_s"] = time.process_time() - c0  # all threads: wall time on a loaded machine misleads
+    doc["wall_time_base_identification_s"] = t_base
     doc["data"] = (run.get("data") or {}).get("path") or "synthetic (in memory; truth kept away)"
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -76,30 +82,57 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
 
 def render_markdown(doc: dict) -> str:
     loc = doc["localisation"]
-    lines = [f"# Diagnosis: **{doc['verdict']}**", "",
+    gb, ga = doc["gap_before"], doc["gap_after"]
+    lines = [f"# Diagnosis: **{doc['verdict']}** ({doc['status'].replace('_', ' ')})", "",
              f"Data: {doc['data']}", "",
-             f"Held-out gap (RMS residual over noise): {doc['gap_before']['heldout_rms_over_noise']:.3f} before, "
-             f"{doc['gap_after']['heldout_rms_over_noise']:.3f} after "
-             f"(1.0 = the noise level).", "",
-             "## Where the base model misses", "",
-             f"chi^2 per residual: {loc['chi2_per_residual']:.3f}", "",
-             "| channel | share of residual energy |", "|---|---|"]
+             f"Held-out gap (RMS residual over noise, 1.0 = the noise level): {gb['heldout_rms_over_noise']:.3f} "
+             f"before, {ga['heldout_rms_over_noise']:.3f} after; at the noise level up to "
+             f"{gb['noise_band'][1]:.3f} (the noise estimate's own uncertainty).",
+             f"Share of the excess held-out misfit (above the noise) explained: "
+             f"{100 * doc['explained_share']:.0f} %.", "",
+             f"Where: {loc['summary']}.", ""]
+    if doc["per_effect"]:
+        lines += ["| effect (in order of selection) | own share (drop-one) | fitted parameters (+- standard error) |",
+                  "|---|---|---|"]
+        for pe in doc["per_effect"]:
+            par = ", ".join(f"{k} = {v['value']:.4g} +- {v['standard_error']:.2g}" for k, v in pe["parameters"].items())
+            lines.append(f"| {pe['effect']} | {100 * pe['drop_one_share']:.0f} % | {par} |")
+        lines.append("")
+    for group in doc["indistinguishable"]:
+        lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")
+    if doc.get("weak_effects"):
+        lines.append(f"Best candidates, removing too little to explain the gap: {', '.join(doc['weak_effects'])}.")
+    for ex in doc["excluded"]:
+        lines.append(f"Not a candidate: {ex['effect']}: {ex['reason']}.")
+    lines += ["", "## Where the base model misses", "",
+              f"chi^2 per held-out residual: {loc['chi2_per_residual']:.3f}", "",
+              "| channel | share of residual energy |", "|---|---|"]
     lines += [f"| {k} | {100 * v:.1f} % |" for k, v in loc["by_channel"].items()]
     lines += ["", "| segment | share |", "|---|---|"]
     lines += [f"| {k} | {100 * v:.1f} % |" for k, v in loc["by_segment"].items()]
-    if loc["current_residual_harmonics_A"]:
-        lines += ["", "Current residual by harmonic order of the supply (A; negative = rotating backwards):", "",
-                  "| order | " + " | ".join(loc["current_residual_harmonics_A"]) + " |",
-                  "|---|" + "---|" * len(loc["current_residual_harmonics_A"]),
-                  "| A | " + " | ".join(f"{v:.4f}" for v in loc["current_residual_harmonics_A"].values()) + " |"]
-    lines += ["", "## Candidates", "",
-              "| effect | held-out reduction | in-sample reduction | criterion (delta chi^2 + k ln n) "
-              "| extra parameters |",
-              "|---|---|---|---|---|"]
-    for r in doc["ranking"]:
-        extra = ", ".join(f"{k} = {v:.4g}" for k, v in r["extra_parameters"].items())
-        lines.append(f"| {r['effect']} | {100 * r['heldout_reduction']:.1f} % | {100 * r['in_sample_reduction']:.1f} % "
-                     f"| {r['criterion']:.1f} | {extra} |")
-    lines += ["", "Noise levels estimated from the data: "
-              + ", ".join(f"{k} {v:.3g}" for k, v in doc["noise_level"].items()), ""]
+    if loc["excess_windows"]:
+        lines += ["", "| excess window | start (s) | end (s) | share of the excess |", "|---|---|---|---|"]
+        lines += [f"| {k + 1} | {w['start_s']:.4g} | {w['end_s']:.4g} | {100 * w['excess_share']:.0f} % |"
+                  for k, w in enumerate(loc["excess_windows"])]
+    for rnd in doc["selection"]:
+        if "screening" in rnd:
+            lines += ["", f"## Screening from base{''.join(' + ' + e for e in rnd['from'])} "
+                          "(each candidate fitted on fold A, scored on fold B)", "",
+                      "| candidate | held-out chi^2 (fold B) |", "|---|---|"]
+            lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} |" for r in rnd["screening"]]
+            lines.append(f"\nWithout a new effect: {rnd['screening'][0]['heldout_chi2_base_fold_B']:.3f}; "
+                         f"kept: {', '.join(rnd['kept'])}.")
+            continue
+        lines += ["", f"## Selection round {rnd['round']} (from base{''.join(' + ' + e for e in rnd['from'])}, "
+                      f"held-out chi^2 {rnd['heldout_chi2_from']:.3f}, "
+                      f"effective samples {rnd['effective_samples']:.0f})",
+                  "", "| candidate | held-out chi^2 | share of the excess removed | criterion | earns |",
+                  "|---|---|---|---|---|"]
+        for r in rnd["candidates"]:
+            lines.append(f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
+                         f"| {r['criterion']:.1f} | {'yes' if r['earns'] else 'no'} |")
+    lines += ["", "Noise estimated from the data: "
+              + "; ".join(f"{k} {v['std']:.3g} (+-{100 * v['rel_uncertainty']:.0f} %, {v['method']})"
+                          for k, v in doc["noise"].items()),
+              "", f"Wall time: {doc['wall_time_s']:.1f} s (CPU {doc.get('cpu_time_s', float('nan')):.1f} s).", ""]
     return "\n".join(lines)

@@ -1,0 +1,197 @@
+"""Noise level of each measured channel, with its own uncertainty, that holds for coloured noise.
+
+Where the record has a pre-trigger (samples before the supply is switched on: voltage and
+current at rest), every channel's noise is the spread of that quiet segment
+(:func:`benchmark.core.uncertainty.noise_from_quiet`, unbiased for AR(1) noise). Otherwise:
+
+* currents: the end of the start-up, least-squares fitted by the supply's harmonics, each
+  with an amplitude that may still drift as a quadratic in time
+  (:func:`noise_from_modulated_periodic`, the same degrees-of-freedom correction for
+  coloured noise as :func:`benchmark.core.uncertainty.noise_from_periodic`); what is left,
+  coloured noise included, is the noise;
+* speed: a Savitzky-Golay fit over the steady state (:func:`noise_from_smooth`);
+* stop record: the same smooth fit over the free motion.
+
+Segments too short for these fall back to a fourth-difference estimate (white noise only),
+with a 20 % relative uncertainty. A quantised channel's noise is at least ``q / sqrt(12)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from benchmark.core.uncertainty import (
+    NoiseEstimate,
+    _ar1_gain,
+    _phi,
+    _solve,
+    noise_from_quiet,
+    noise_from_smooth,
+    refine_frequency,
+)
+
+#: Fallback relative uncertainty of the fourth-difference estimate.
+FALLBACK_REL_UNCERTAINTY = 0.2
+#: A pre-trigger needs at least this many samples.
+MIN_QUIET = 48
+
+
+def fourth_difference(x: np.ndarray) -> float:
+    """White-noise std from fourth differences (robust through the median)."""
+    d4 = np.diff(np.asarray(x, float), 4)
+    return 1.4826 * float(np.median(np.abs(d4 - np.median(d4)))) / math.sqrt(70.0)
+
+
+def quantum(x: np.ndarray) -> float:
+    """The quantisation step of a channel whose values sit on a grid, else 0."""
+    x = np.asarray(x, float)
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 0]
+    if len(steps) <= 10:
+        return 0.0
+    q = float(np.min(steps))
+    if q <= 0:
+        return 0.0
+    on_grid = np.abs(x / q - np.round(x / q)) < 1e-6
+    return q if np.mean(on_grid) > 0.99 else 0.0
+
+
+def _floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
+    q = quantum(x)
+    std = max(est.std, q / math.sqrt(12.0), floor)
+    if std == est.std:
+        return est
+    return NoiseEstimate(std, est.rel_uncertainty, est.n_effective, est.method + " (floored)")
+
+
+def fallback(x: np.ndarray, floor: float, why: str) -> NoiseEstimate:
+    n = max(len(x) - 4, 1)
+    return _floored(NoiseEstimate(fourth_difference(x), FALLBACK_REL_UNCERTAINTY, float(n),
+                                  f"fourth differences ({why})"), x, floor)
+
+
+def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
+                                  rel_line: float = 1e-3) -> NoiseEstimate:
+    """Noise of a periodic segment whose amplitude still drifts (the end of a start-up):
+    least squares on the supply's harmonics each modulated by a polynomial in time of
+    ``order`` (and a polynomial trend). The harmonics kept are those whose amplitude in a plain
+    periodic fit exceeds ``rel_line`` of the largest. Each column at ``omega`` absorbs
+    ``g(omega)`` noise degrees of freedom (``g`` the AR(1) spectrum of the residual relative to
+    white), so the variance is divided by ``N - sum g`` and ``N_eff = (N - sum g)(1 - phi^2)/(1 + phi^2)``
+    as in :func:`benchmark.core.uncertainty.noise_from_periodic`."""
+    x = np.asarray(x, float).ravel()
+    n = len(x)
+    t = np.arange(n) / fs
+    tau = np.linspace(-1.0, 1.0, n)
+    h_max = int(n_harmonics or 0.48 * fs / f0)
+    w = 2 * np.pi * f0 * t
+    plain = [np.ones(n)]
+    for h in range(1, h_max + 1):
+        plain += [np.cos(h * w), np.sin(h * w)]
+    A = np.column_stack(plain)
+    c = _solve(A, x)
+    amp = np.hypot(c[1::2], c[2::2])
+    keep = np.flatnonzero(amp > rel_line * amp.max()) + 1
+    cols, om = [tau**k for k in range(order + 1)], [0.0] * (order + 1)
+    for h in keep:
+        for k in range(order + 1):
+            cols += [tau**k * np.cos(h * w), tau**k * np.sin(h * w)]
+            om += [2 * np.pi * h * f0 / fs] * 2
+    A = np.column_stack(cols)
+    e = x - A @ _solve(A, x)
+    phi = _phi(e)
+    p_eff = min(float(np.sum(_ar1_gain(phi, np.asarray(om)))), n / 2)
+    dof = max(n - p_eff, 1.0)
+    n_eff = dof * (1 - phi**2) / (1 + phi**2)
+    return NoiseEstimate(math.sqrt(float(e @ e) / dof), 1.0 / math.sqrt(2 * n_eff), n_eff,
+                         f"periodic fit, amplitudes drifting (order {order}; {f0:.4f} Hz, {len(keep)} harmonics)")
+
+
+def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndarray, i_beta: np.ndarray) -> int:
+    """Samples before the supply is switched on: voltage below 5 % of its peak and the current
+    not yet risen above 5 % of its peak (0 when the record starts energised)."""
+    v = np.hypot(v_alpha, v_beta)
+    i = np.hypot(i_alpha, i_beta)
+    on = np.flatnonzero((v > 0.05 * np.max(v)) | (i > 0.05 * np.max(i)))
+    k = int(on[0]) if len(on) else 0
+    return max(k - 2, 0)
+
+
+def steady_start(speed: np.ndarray | None, n: int, period: int = 1) -> int:
+    """First sample of the steady state: the speed (averaged over a supply period) within
+    0.5 % of its final value for good, plus three periods, and not before 60 % of the record (nor after 80 %)."""
+    if speed is None or not np.all(np.isfinite(speed)):
+        return int(0.7 * n)
+    ws = np.convolve(speed, np.ones(period) / period, mode="same") if period > 1 else speed
+    final = float(np.mean(speed[int(0.9 * n):]))
+    off = np.flatnonzero(np.abs(ws[:n - period] - final) > 0.005 * max(abs(final), 1e-9))
+    k = int(off[-1]) + 1 + 3 * period if len(off) else 0  # three periods more: the currents settle later
+    return min(max(k, int(0.6 * n)), int(0.8 * n))
+
+
+def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: float,
+                  frequency_known: bool = False) -> dict[str, NoiseEstimate]:
+    """Noise of ``i_alpha``, ``i_beta`` and (when measured) ``speed`` of one start-up record."""
+    n = len(t)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
+    i_floor = 1e-4 * float(np.max(np.abs(np.concatenate([i_alpha, i_beta]))))
+    out: dict[str, NoiseEstimate] = {}
+    k_quiet = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    chans = {"i_alpha": i_alpha, "i_beta": i_beta}
+    if has_speed:
+        chans["speed"] = speed
+    if k_quiet >= MIN_QUIET:
+        for ch, x in chans.items():
+            floor = i_floor if ch != "speed" else 1e-4 * float(np.max(np.abs(speed)))
+            try:
+                out[ch] = _floored(noise_from_quiet(x[:k_quiet]), x[:k_quiet], floor)
+            except ValueError:
+                out[ch] = fallback(x, floor, "pre-trigger too short")
+        return out
+    k_ss = steady_start(speed if has_speed else None, n, max(int(fs / supply_frequency), 1))
+    f0 = float(supply_frequency)
+    if not frequency_known and (n - k_ss) / fs * f0 >= 2:
+        try:  # the supply frequency from the voltage (cheap: few harmonics), then every harmonic
+            f0 = refine_frequency(v_alpha[k_ss:], fs, f0, n_harmonics=13)
+        except (ValueError, np.linalg.LinAlgError):
+            f0 = float(supply_frequency)
+    for ch in ("i_alpha", "i_beta"):
+        x = chans[ch][k_ss:]
+        try:
+            if (n - k_ss) / fs * f0 < 2:
+                raise ValueError("steady state shorter than two periods")
+            est = noise_from_modulated_periodic(x, fs, f0)
+            out[ch] = _floored(est, x, i_floor)
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            out[ch] = fallback(chans[ch], i_floor, str(exc))
+    if has_speed:
+        x = speed[k_ss:]
+        floor = 1e-4 * float(np.max(np.abs(speed)))
+        window = int(min(101, len(x) // 3)) | 1
+        try:
+            out["speed"] = _floored(noise_from_smooth(x, window), x, floor)
+        except ValueError as exc:
+            out["speed"] = fallback(speed, floor, str(exc))
+    return out
+
+
+def stop_noise(speed: np.ndarray, w0: float) -> NoiseEstimate:
+    floor = 1e-4 * max(w0, 1e-9)
+    window = int(min(51, len(speed) // 3)) | 1
+    try:
+        return _floored(noise_from_smooth(speed, window), speed, floor)
+    except ValueError as exc:
+        return fallback(speed, floor, str(exc))
+
+
+def combined(noise: dict[str, NoiseEstimate], counts: dict[str, int]) -> NoiseEstimate:
+    """The noise of the stacked residual, each channel divided by its own noise (std 1): its
+    relative uncertainty is the sample-weighted mean of the channels' (the channels' errors
+    taken as fully correlated: conservative)."""
+    total = sum(counts.values()) or 1
+    u = sum(noise[c].rel_uncertainty * k for c, k in counts.items()) / total
+    n_eff = sum(noise[c].n_effective for c in counts)
+    return NoiseEstimate(1.0, float(u), float(n_eff), "channels normalised by their own noise")

@@ -1,0 +1,57 @@
+"""Blind evaluation: the scores (exact sets, Wilson intervals, false alarms, both named, left
+out when invisible) and the draws (effect-free and two-effect shares, the truth kept away)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from benchmark.analysis.blind import label_of, n_effects_of, predicted_label, summarise, wilson
+
+
+def _row(i, truth, status, effects, share=1.0, gap=5.0):
+    doc = {"status": status, "effects": effects}
+    return {"index": i, "truth": label_of(truth), "truth_effects": truth, "predicted": predicted_label(doc),
+            "status": status, "verdict": "+".join(effects) or "none", "effects": effects,
+            "explained_share": share, "gap_before": gap, "gap_after": 1.0,
+            "invisible": bool(truth) and status == "no_gap", "wall_time_s": 1.0}
+
+
+def test_wilson_interval_matches_the_textbook_values():
+    lo, hi = wilson(18, 20)
+    assert math.isclose(lo, 0.6990, abs_tol=1e-3) and math.isclose(hi, 0.9721, abs_tol=1e-3)
+    assert wilson(0, 10)[0] == 0.0 and wilson(10, 10)[1] == 1.0
+    assert all(math.isnan(v) for v in wilson(0, 0))
+
+
+def test_scores_count_exact_sets_false_alarms_both_named_and_leave_out_invisible_effects():
+    rows = [
+        _row(0, [], "no_gap", [], gap=1.0),
+        _row(1, [], "explained", ["iron_loss"]),  # a false alarm
+        _row(2, [], "unexplained", []),  # a gap on an effect-free set is an alarm too
+        _row(3, ["double_cage"], "explained", ["double_cage"], share=0.97),
+        _row(4, ["double_cage"], "partly_explained", ["double_cage", "iron_loss"], share=0.6),  # extra name: miss
+        _row(5, ["iron_loss", "main_saturation"], "explained", ["main_saturation", "iron_loss"], share=0.9),
+        _row(6, ["inverter_drop", "temperature_drift"], "partly_explained", ["temperature_drift"], share=0.5),
+        _row(7, ["iron_loss"], "no_gap", [], gap=1.01),  # invisible: left out and listed
+    ]
+    s = summarise(rows)
+    assert s["n"] == 8 and s["scored"] == 7
+    assert [r["index"] for r in s["left_out_invisible"]] == [7]
+    assert s["exact"] == 3  # sets 0, 3, 5
+    assert s["effect_sets"] == 4 and s["effect_sets_exact"] == 2
+    assert s["false_alarms"] == 2 and s["effect_free_sets"] == 3
+    assert s["two_effect_sets"] == 2 and s["both_named"] == 1
+    assert s["median_explained_share_correct"] == np.median([0.97, 0.9])
+    labels = s["labels"]
+    cm = np.array(s["confusion"])
+    assert cm[labels.index("iron_loss+main_saturation"), labels.index("iron_loss+main_saturation")] == 1
+    assert cm.sum() == 7
+
+
+def test_draw_counts_give_effect_free_and_two_effect_shares():
+    cfg = OmegaConf.create({"n": 30, "free_share": 0.34, "two_share": 0.3})
+    counts = [n_effects_of(i, cfg) for i in range(30)]
+    assert counts.count(0) == 10 and counts.count(2) == 6 and counts.count(1) == 14
