@@ -33,9 +33,9 @@ from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
 from benchmark.core.io import write_table_atomic, write_text_atomic
 from benchmark.core.journal import EvaluationJournal
-from benchmark.core.quality import assess
 from benchmark.core.problem import OptimizeResult, Problem, Status
 from benchmark.core.progress import ProgressBar, progress_wanted
+from benchmark.core.quality import assess
 from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
 from benchmark.core.tables import table_size_limit
 

@@ -29,6 +29,9 @@ class Identification:
     cost : the cost at ``x`` (the problem's own cost).
     polish : what the polish did (evaluations, cost before/after, wall time, SciPy's message), or None.
     history : (evaluations, best cost, phase) after every improvement; phase ``optimizer`` or ``polish``.
+    status : how the whole sequence ended (:func:`final_status`): the polish's termination when a
+        polish ran (``converged`` when SciPy's tolerances stopped it, ``budget_spent`` when its
+        budget did), else the optimiser's status.
     """
 
     result: OptimizeResult
@@ -36,6 +39,30 @@ class Identification:
     cost: float
     polish: dict | None = None
     history: list[tuple[int, float, str]] = field(default_factory=list)
+    status: str = ""
+
+    def __post_init__(self):
+        if not self.status:
+            self.status = self.result.status.value
+
+
+#: Substrings of SciPy ``least_squares`` messages that mean its tolerances were met.
+_CONVERGED_MESSAGES = ("`ftol` termination", "`xtol` termination", "`gtol` termination", "Both `ftol` and `xtol`")
+
+
+def polish_converged(message: str) -> bool:
+    """True when a polish message is one of SciPy's tolerance terminations."""
+    return any(m in str(message) for m in _CONVERGED_MESSAGES)
+
+
+def final_status(result: OptimizeResult, polish: dict | None) -> str:
+    """How a run really ended: with a polish that ran from the optimiser's point, ``converged``
+    when the polish met its tolerances and ``budget_spent`` when it ran out of evaluations; a
+    failed or timed-out optimiser keeps its status; no polish: the optimiser's status."""
+    status = result.status.value
+    if not polish or not polish.get("evaluations") or status in ("failed", "timeout"):
+        return status
+    return "converged" if polish.get("converged") else "budget_spent"
 
 
 def polish_and_keep_better(problem: Problem, result: OptimizeResult, budgeted: BudgetedProblem,
@@ -56,7 +83,9 @@ def polish_and_keep_better(problem: Problem, result: OptimizeResult, budgeted: B
     pol = polish_least_squares(problem, result.x, int(polish_budget))
     out.polish = {"evaluations": pol.nfev, "cost_before": result.fun, "cost_after": pol.best_cost,
                   "wall_time_s": time.perf_counter() - t0, "message": pol.message,
-                  "improved": bool(pol.best_x is not None and pol.best_cost < result.fun)}
+                  "improved": bool(pol.best_x is not None and pol.best_cost < result.fun),
+                  "converged": polish_converged(pol.message)}
+    out.status = final_status(result, out.polish)
     out.history += [(result.nfev + e, c, "polish") for e, c in zip(pol.history.evaluations, pol.history.best_cost,
                                                                     strict=True)]
     if pol.best_x is not None and pol.best_cost <= out.cost:

@@ -232,22 +232,51 @@ def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str
               f"budget {r.get('budget')}, {r.get('wall_time_s', 0):.2f} s."
               + (f" {r['message']}" if r.get("message") and r.get("status") != "budget_spent" else ""), ""]
     est, truth, err = r.get("estimate") or {}, r.get("truth") or {}, r.get("rel_error") or {}
+    se = r.get("standard_error") or {}
+
+    def _se(k):
+        return f"{se[k]:.3g}" if se.get(k) is not None else "-"
+
     if est and truth:
-        lines += ["| parameter | estimate | truth | error |", "|---|---|---|---|"]
+        lines += ["| parameter | estimate | truth | error | standard error |", "|---|---|---|---|---|"]
         for k, v in est.items():
             t = f"{truth[k]:.6g}" if k in truth else "-"
             e = f"{100 * err[k]:+.3f} %" if k in err else "-"
-            lines.append(f"| {k} | {v:.6g} | {t} | {e} |")
+            lines.append(f"| {k} | {v:.6g} | {t} | {e} | {_se(k)} |")
         lines.append("")
     elif est:  # measured data: no truth to score against
-        lines += ["| parameter | estimate |", "|---|---|"] + [f"| {k} | {v:.6g} |" for k, v in est.items()] + [""]
+        lines += ["| parameter | estimate | standard error |", "|---|---|---|"] + \
+            [f"| {k} | {v:.6g} | {_se(k)} |" for k, v in est.items()] + [""]
+    unc = r.get("uncertainty") or {}
+    if se:
+        lines += ["Standard errors (searched parameters): " + unc.get("method", "") + "; "
+                  + f"{unc.get('evaluations', '?')} extra evaluations, not counted in the budget. "
+                  "Parameters not searched (fixed by the data or derived) have none.", ""]
+    corr = r.get("correlation")
+    names = r.get("parameter_names") or []
+    if corr and len(corr) == len(names):
+        lines += ["Correlation of the searched parameters:", "", "| | " + " | ".join(names) + " |",
+                  "|---" * (len(names) + 1) + "|"]
+        for n, row in zip(names, corr, strict=True):
+            lines.append(f"| {n} | " + " | ".join("-" if c is None else f"{c:+.3f}" for c in row) + " |")
+        lines.append("")
+    fq = {k: v for k, v in (r.get("fit_quality") or {}).items() if isinstance(v, dict)}
+    if fq:
+        lines += ["Fit quality: RMS misfit over the noise estimated from the data (at the noise level when "
+                  "the ratio is inside the band):", "", "| channel | RMS misfit | noise | ratio | band | verdict |",
+                  "|---|---|---|---|---|---|"]
+        for k, v in fq.items():
+            verdict = "at noise level" if v["at_noise_level"] else (
+                "model misses the data" if v["ratio"] > v["threshold"] else "below noise level")
+            lines.append(f"| {k} | {v['rms_misfit']:.4g} | {v['noise']:.4g} | {v['ratio']:.3g} | "
+                         f"{v['lower']:.3g}-{v['threshold']:.3g} | {verdict} |")
+        lines.append("")
     mech = info.get("mechanical")
     if mech:
         lines += [f"Free-stop pre-identification (case {mech['case']}): tau_m = {mech['tau_m']:.6g} s, "
                   f"fc/J = {mech['fc_over_J']:.6g} rad/s^2.", ""]
     warns = list(r.get("warnings") or []) + [f"figure not made: {e}" for e in errors]
-    if warns:
-        lines += ["Warnings:", ""] + [f"- {w}" for w in warns] + [""]
+    lines += (["Warnings:", ""] + [f"- {w}" for w in warns] + [""]) if warns else ["Warnings: none.", ""]
     lines += ["## Figures", ""]
     if not plots:
         lines += ["(none could be made)", ""]

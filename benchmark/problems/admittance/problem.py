@@ -337,6 +337,20 @@ class AdmittanceProblem(Problem):
         }
         return info
 
+    def quality_warnings(self, x) -> list[str]:
+        """A negative R1sigma (a stray-loss resistance cannot be negative) is reported with why:
+        R1sigma = R1_total - R1 (DC), so it is negative when the fitted R1_total comes out below
+        the DC resistance, within the error of R1_total at realistic noise; the circuit is
+        still valid (only the sum R1_total acts)."""
+        est = self.estimate(x)
+        if est.get("R1sigma", 0.0) < 0:
+            return [f"R1sigma = {est['R1sigma']:.3g} ohm is negative (not physical): R1sigma = R1_total - R1 with "
+                    "R1 the "
+                    f"DC resistance {est['R1']:.4g} ohm, and the fitted R1_total = {est['R1_total']:.4g} ohm came out "
+                    "below it; only R1_total acts on the admittance, so read R1sigma as 0 within the uncertainty of "
+                    "R1_total (see standard_error)"]
+        return []
+
     def _describe_compensation(self) -> dict:
         if self.profile is None:
             return {

@@ -41,15 +41,21 @@ class TimeDomainProblem(Problem):
         are searched).
     inertia : known inertia (kg m^2), or None to search ``J``.
     exponent : 1 (eq. 15) or 2 (eq. 14).
-    weights : (ka, kb, kw).
+    weights : (ka, kb, kw). The speed weight is set to 0 when no record has a speed (a record
+        without a speed sensor has ``speed`` all NaN; those NaN are replaced by 0 in the arrays).
     truth : true parameters for scoring, or None.
+    stator_resistance : ``free`` (searched), ``prior`` (searched, with a penalty residual pulling
+        it towards the DC value, see :meth:`prior_residual`) or ``fixed`` (not searched: held at
+        the DC value). ``prior`` and ``fixed`` need ``dataset.stator_dc_resistance``.
     """
 
     name = "timedomain"
+    #: Units of the parameters (messages and report).
+    units = {"Rs": "ohm", "Ls": "H", "Le": "H", "Rr": "ohm", "J": "kg m^2", "fv": "N m s/rad", "fc": "N m"}
 
     def __init__(self, dataset: StartupDataset, lower, upper, mechanical: MechanicalEstimate | None = None,
                  inertia: float | None = None, exponent: int = 1, weights=(1.0, 1.0, 0.5),
-                 truth: dict | None = None):
+                 truth: dict | None = None, stator_resistance: str = "free"):
         if exponent not in (1, 2):
             raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent}")
         self.dataset = dataset
@@ -59,7 +65,21 @@ class TimeDomainProblem(Problem):
         self.weights = np.asarray(weights, dtype=float)
         if self.weights.shape != (3,) or np.any(self.weights < 0) or not np.any(self.weights > 0):
             raise ConfigError(f"problem.cost.weights: need three non-negative weights, got {weights}")
-        names = ["Rs", "Ls", "Le", "Rr"]
+        self.speed_measured = any(np.any(np.isfinite(r.speed)) for r in dataset.startups)
+        if not self.speed_measured:
+            self.weights = self.weights.copy()
+            self.weights[2] = 0.0
+            if not np.any(self.weights > 0):
+                raise ConfigError("problem.cost.weights: the records have no speed and both current weights are 0")
+        if stator_resistance not in ("free", "prior", "fixed"):
+            raise ConfigError(f"problem.stator_resistance: must be free, prior or fixed, got {stator_resistance!r}")
+        self.stator_resistance = stator_resistance
+        self.rs_dc = getattr(dataset, "stator_dc_resistance", None)
+        if stator_resistance != "free" and not (self.rs_dc is not None and self.rs_dc > 0):
+            raise ConfigError(f"problem.stator_resistance={stator_resistance}: needs the DC stator resistance "
+                              "(stator_dc_resistance in the data set's meta.yaml); use problem.stator_resistance=free")
+        names = [] if stator_resistance == "fixed" else ["Rs"]
+        names += ["Ls", "Le", "Rr"]
         if inertia is None:
             names.append("J")
         if mechanical is None:
@@ -72,15 +92,20 @@ class TimeDomainProblem(Problem):
         self._linear = hold_is_linear(dataset.input_hold)
         self._records = [
             (np.ascontiguousarray(r.v_alpha), np.ascontiguousarray(r.v_beta), np.ascontiguousarray(r.i_alpha),
-             np.ascontiguousarray(r.i_beta), np.ascontiguousarray(r.speed))
+             np.ascontiguousarray(r.i_beta),
+             np.ascontiguousarray(r.speed if self.speed_measured else np.zeros_like(r.i_alpha)))
             for r in dataset.startups
         ]
+        self._noise = None  # per-channel noise estimates, made on first use (see channel_noise)
+        self._prior_scale = None
 
     # -- parameter vectors -------------------------------------------------------------
     def full_parameters(self, X: np.ndarray) -> np.ndarray:
         """Searched vectors (n, n_var) -> physical parameters (n, 7) in PARAMETER_NAMES order."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         col = {n: X[:, k] for k, n in enumerate(self.parameter_names)}
+        if "Rs" not in col:  # stator_resistance=fixed
+            col["Rs"] = np.full(len(X), float(self.rs_dc))
         J = col["J"] if "J" in col else np.full(len(X), self.inertia)
         if self.mechanical is not None:
             fv = J / self.mechanical.tau_m
@@ -100,7 +125,131 @@ class TimeDomainProblem(Problem):
         for v_a, v_b, i_a, i_b, w in self._records:
             total += startup_cost_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time, i_a, i_b, w,
                                         float(self.dataset.pole_pairs), self.weights, self.exponent)
+        if self.stator_resistance == "prior":
+            p = self.prior_residual(X)
+            total = total + (p**2 if self.exponent == 2 else np.abs(p))
         return total
+
+    # -- stator resistance prior -------------------------------------------------------
+    #: Relative one-sigma uncertainty of the DC resistance as a value of Rs during the record
+    #: (measurement, and the winding temperature drifting from the DC measurement's).
+    RS_PRIOR_REL_STD = 0.05
+
+    def prior_residual(self, X: np.ndarray) -> np.ndarray:
+        """The penalty residual of ``stator_resistance=prior``, one per candidate:
+        ``s (Rs - R_dc) / (0.05 R_dc)``, ``s`` the noise of one weighted sample (square root of
+        the sum over channels of weight x noise variance, from :meth:`channel_noise`). With
+        eq. 14 its square is the Gaussian prior ``Rs ~ N(R_dc, (0.05 R_dc)^2)`` in the units of
+        the cost (a MAP estimate); with eq. 15 its absolute value is added (a Laplace prior of
+        about the same width). The DC value is used as measured (no temperature correction:
+        the record is taken to be at ``winding_temperature``)."""
+        X = np.atleast_2d(np.asarray(X, float))
+        if self._prior_scale is None:
+            var = 0.0
+            for per_record in self.channel_noise():
+                for c, est in enumerate(per_record):
+                    if est is not None:
+                        var += self.weights[c] * est.std**2
+            self._prior_scale = math.sqrt(var) if var > 0 else 1e-3
+        rs = X[:, self.parameter_names.index("Rs")]
+        return self._prior_scale * (rs - self.rs_dc) / (self.RS_PRIOR_REL_STD * self.rs_dc)
+
+    # -- noise, fit quality and warnings (benchmark.core.quality) ----------------------------
+    def channel_noise(self) -> list[list]:
+        """Per record, the noise estimate (:class:`benchmark.core.uncertainty.NoiseEstimate`) of
+        i_alpha, i_beta and speed (None where not measured or not estimable), from the data alone:
+        a constant + linear trend + every harmonic of the supply frequency below Nyquist (at most
+        200) fitted over the last
+        quarter of the record (the steady state after the start; coloured noise stays in the
+        residual), else a Savitzky-Golay fit of the whole channel. A noise-free record gets a floor
+        of 1e-7 of the channel's RMS."""
+        if self._noise is not None:
+            return self._noise
+        from benchmark.core.uncertainty import NoiseEstimate, noise_from_smooth
+
+        fs = 1.0 / self.dataset.sample_time
+        out = []
+        for (v_a, v_b, i_a, i_b, w) in self._records:
+            n = len(i_a)
+            tail = slice(int(0.75 * n), n)
+            f0 = _supply_frequency(v_a[tail], v_b[tail], self.dataset.sample_time) or self.dataset.supply_frequency
+            ests = []
+            for c, x in enumerate((i_a, i_b, w)):
+                if c == 2 and not self.speed_measured:
+                    ests.append(None)
+                    continue
+                est = None
+                try:
+                    if f0 and f0 > 0 and (n - tail.start) * f0 / fs >= 2 * PERIODS_PER_BLOCK:
+                        est = _blockwise_periodic_noise(x[tail], fs, f0)
+                except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+                    est = None
+                if est is None:
+                    try:
+                        est = noise_from_smooth(x, 21)
+                    except ValueError:
+                        est = None
+                if est is not None:
+                    floor = 1e-7 * float(np.sqrt(np.mean(x**2)))
+                    if not est.std > floor:
+                        est = NoiseEstimate(floor, est.rel_uncertainty, est.n_effective,
+                                            est.method + " (noise-free record: floor 1e-7 of the channel RMS)")
+                ests.append(est)
+            out.append(ests)
+        self._noise = out
+        return out
+
+    def hac_bandwidth_floor(self) -> float:
+        """Smallest Bartlett bandwidth (samples) of the HAC covariance: one supply period
+        (see :mod:`benchmark.core.quality`); 0 when the frequency is unknown."""
+        v_a, v_b = self._records[0][0], self._records[0][1]
+        n = len(v_a)
+        f0 = _supply_frequency(v_a[int(0.75 * n):], v_b[int(0.75 * n):], self.dataset.sample_time) or \
+            self.dataset.supply_frequency
+        return float(1.0 / (f0 * self.dataset.sample_time)) if f0 and f0 > 0 else 0.0
+
+    def residual_layout(self) -> list[tuple[str, int, int]]:
+        """(channel, start, stop) of each contiguous segment of :meth:`residuals_batch` rows."""
+        out, offset = [], 0
+        for j, rec in enumerate(self._records):
+            m = len(rec[2])
+            for c, key in enumerate(WEIGHT_KEYS):
+                out.append((key if len(self._records) == 1 else f"{key}[{j}]", offset + c * m, offset + (c + 1) * m))
+            offset += 3 * m
+        if self.stator_resistance == "prior":
+            out.append(("Rs prior", offset, offset + 1))
+        return out
+
+    def fit_channels(self, x) -> list[tuple]:
+        """(channel, held-in residual ``measured - simulated`` in A or rad/s, noise estimate) of
+        every measured, weighted channel at ``x``."""
+        sims = self.simulate(np.asarray(x, float)[None, :])
+        out = []
+        for j, (sim, rec, noise) in enumerate(zip(sims, self._records, self.channel_noise(), strict=True)):
+            for c, key in enumerate(WEIGHT_KEYS):
+                if self.weights[c] == 0 or noise[c] is None:
+                    continue
+                out.append((key if len(self._records) == 1 else f"{key}[{j}]", rec[2 + c] - sim[0, c], noise[c]))
+        return out
+
+    #: Rs departing from the DC resistance by more than this (relative) is reported.
+    RS_DC_TOLERANCE = 0.20
+
+    def quality_warnings(self, x) -> list[str]:
+        """This problem's own warnings at ``x``: Rs against the DC resistance, speed not measured."""
+        out = []
+        if self.rs_dc is not None and self.rs_dc > 0 and self.stator_resistance != "fixed":
+            rs = self.estimate(x)["Rs"]
+            dev = rs / self.rs_dc - 1.0
+            if abs(dev) > self.RS_DC_TOLERANCE:
+                temp = getattr(self.dataset, "winding_temperature", None)
+                at = f" at {temp:g} C" if temp is not None else ""
+                out.append(f"Rs = {rs:.4g} ohm departs from the DC resistance {self.rs_dc:.4g} ohm{at} "
+                           f"(meta.yaml stator_dc_resistance) by {100 * dev:+.0f} % (more than "
+                           f"{100 * self.RS_DC_TOLERANCE:.0f} %): the fit may be in a wrong minimum or the model "
+                           "misses "
+                           "the data; try problem.stator_resistance=prior or fixed, and run benchmark.diagnose")
+        return out
 
     def simulate(self, X: np.ndarray) -> list[np.ndarray]:
         """Simulated (i_alpha, i_beta, speed) per record: a list of (n, 3, N) arrays."""
@@ -117,6 +266,8 @@ class TimeDomainProblem(Problem):
         for sim, (_, _, i_a, i_b, w) in zip(self.simulate(X), self._records, strict=True):
             meas = np.stack([i_a, i_b, w])[None]
             parts.append((sw * (meas - sim)).reshape(len(sim), -1))
+        if self.stator_resistance == "prior":
+            parts.append(self.prior_residual(X)[:, None])
         r = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(r), r, np.nan)
 
@@ -134,6 +285,8 @@ class TimeDomainProblem(Problem):
             block = r[offset:offset + 3 * m].reshape(3, m)
             total += float(np.sqrt(self.weights) @ np.abs(block).sum(axis=1))
             offset += 3 * m
+        if self.stator_resistance == "prior":
+            total += float(abs(r[offset]))
         return total
 
     @property
@@ -162,7 +315,51 @@ class TimeDomainProblem(Problem):
                                "t_free": m.t_free}
         if self.inertia is not None:
             d["inertia_known"] = self.inertia
+        if not self.speed_measured:
+            d["speed"] = "not measured (speed weight set to 0)"
+        d["stator_resistance"] = self.stator_resistance
+        if self.rs_dc is not None:
+            d["stator_dc_resistance"] = self.rs_dc
+            if self.stator_resistance == "fixed":
+                d["Rs_fixed"] = float(self.rs_dc)
         return d
+
+
+#: Supply periods per block of the blockwise periodic noise estimate.
+PERIODS_PER_BLOCK = 4
+
+
+def _blockwise_periodic_noise(x, fs: float, f0: float):
+    """Noise of a nearly periodic segment: :func:`benchmark.core.uncertainty.noise_from_periodic`
+    (constant, trend, every harmonic below Nyquist up to 200) on consecutive blocks of
+    ``PERIODS_PER_BLOCK`` supply periods, pooled (variances weighted by their degrees of
+    freedom). Short blocks follow a slowly changing amplitude (a start that has not quite
+    settled) that one fit over the whole segment would count as noise."""
+    from benchmark.core.uncertainty import NoiseEstimate, noise_from_periodic, refine_frequency
+
+    x = np.asarray(x, float)
+    nh = min(200, int(0.5 * fs / f0))
+    f = refine_frequency(x, fs, f0, min(nh, 10))
+    block = int(round(PERIODS_PER_BLOCK * fs / f))
+    ests = [noise_from_periodic(x[a:a + block], fs, f, n_harmonics=nh, refine_f0=False)
+            for a in range(0, len(x) - block + 1, block)]
+    if not ests:
+        raise ValueError("segment shorter than one block")
+    dof = np.array([e.n_effective for e in ests])
+    var = float(np.sum(dof * np.array([e.std**2 for e in ests])) / np.sum(dof))
+    n_eff = float(np.sum(dof))
+    return NoiseEstimate(math.sqrt(var), 1.0 / math.sqrt(2 * n_eff), n_eff,
+                         f"periodic fit ({f:.4f} Hz, {nh} harmonics) on {len(ests)} blocks of "
+                         f"{PERIODS_PER_BLOCK} periods")
+
+
+def _supply_frequency(v_a, v_b, dt: float) -> float | None:
+    """Electrical frequency (Hz) from the rotation of the voltage phasor, or None."""
+    phase = np.unwrap(np.angle(np.asarray(v_a) + 1j * np.asarray(v_b)))
+    if len(phase) < 8:
+        return None
+    w = abs(np.polyfit(np.arange(len(phase)) * dt, phase, 1)[0])
+    return float(w / (2 * np.pi)) if np.isfinite(w) and w > 0 else None
 
 
 # -- bounds --------------------------------------------------------------------------
@@ -195,16 +392,23 @@ def derive_bounds(ds: StartupDataset, names: tuple[str, ...]) -> dict[str, tuple
     Ls0 = V1 / (I0 * w_e)
     Z_sc = V1 / I_pk
     Le0 = Z_sc / w_e
-    w_end = float(np.mean(r.speed[tail]))
+    w_end = float(np.mean(r.speed[tail])) if np.all(np.isfinite(r.speed[tail])) else math.nan
+    if not w_end > 0:  # no speed sensor: near no load the rotor runs close to synchronous speed
+        w_end = w_e / ds.pole_pairs
     power = 1.5 * (r.v_alpha * r.i_alpha + r.v_beta * r.i_beta)
     E_in = float(np.sum(power) * ds.sample_time)
     J_max = 2.0 * E_in / max(w_end, 1e-9) ** 2
-    P_end = max(float(np.mean(power[tail])), 1e-9)
+    # friction and windage loss <= no-load input power <= no-load apparent power S0; the mean
+    # power of a zoh (inverter) record can come out near zero, so S0 / 4 is a floor
+    S0 = 1.5 * V1 * I0
+    P_end = max(float(np.mean(power[tail])), 0.25 * S0, 1e-9)
     bounds = {
         "Rs": (Z_sc / 100.0, 2.0 * Z_sc),
         "Rr": (Z_sc / 100.0, 2.0 * Z_sc),
         "Ls": (Ls0 / 3.0, 3.0 * Ls0),
-        "Le": (Le0 / 20.0, 1.5 * Le0),
+        # the peak start-up current includes the DC offset (up to twice the AC peak): Le0 can be
+        # low by a factor of two
+        "Le": (Le0 / 20.0, 4.0 * Le0),
         "J": (J_max / 50.0, J_max),
         "fv": (0.0, P_end / w_end**2),
         "fc": (0.0, P_end / w_end),
@@ -228,7 +432,8 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         stop = ds.stops[0]
         mechanical = fit_free_stop(stop.t, stop.speed, case=settings.friction_case, source=stop.source)
     inertia = ds.inertia if ds.inertia is not None else settings.known_inertia
-    names = ["Rs", "Ls", "Le", "Rr"] + (["J"] if inertia is None else []) + ([] if mechanical else ["fv", "fc"])
+    names = ([] if settings.stator_resistance == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
+        (["J"] if inertia is None else []) + ([] if mechanical else ["fv", "fc"])
     bounds = _choose_bounds(settings, names, ds)
     return TimeDomainProblem(
         ds,
@@ -239,6 +444,7 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         exponent=settings.exponent,
         weights=list(settings.weights),
         truth=truth,
+        stator_resistance=settings.stator_resistance,
     )
 
 
