@@ -468,9 +468,10 @@ def verdict_contract(settings, held: dict, chosen: str, n_readings: int) -> dict
     share = 0.0
     if excess > 0 and chosen != "none":
         share = float(np.clip((before.ratio**2 - after.ratio**2) / excess, 0.0, 1.0))
+    near = after.ratio - 1.0 <= 2.0 * (after.threshold - 1.0)  # a gap many times the noise is not "explained"
     if before.ratio <= before.threshold:
         status, verdict, effects, share = "no_gap", "none", [], 0.0
-    elif chosen != "none" and (after.ratio <= after.threshold or share >= settings.explained_share):
+    elif chosen != "none" and (after.ratio <= after.threshold or (share >= settings.explained_share and near)):
         status, verdict, effects = "explained", chosen, [chosen]
     elif chosen != "none" and share >= settings.partly_share:
         status, verdict, effects = "partly_explained", chosen, [chosen]

@@ -27,7 +27,9 @@ Numbers of the contract (``DiagnosisSettings``; the same band as the fit-quality
   coefficient);
 * ``no_gap``: the base model's held-out ``rho`` is at (or below) the noise level;
 * ``explained``: effects were chosen and what is left is at the noise level, or they remove
-  at least ``explained_share`` (90 %) of the excess held-out misfit ``rho^2 - 1``;
+  at least ``explained_share`` (90 %) of the excess held-out misfit ``rho^2 - 1`` and what is
+  left is within twice the band (``rho - 1 <= 2 (threshold - 1)``): a gap still many times the
+  noise is never called explained, whatever share of a huge excess was removed;
 * ``partly_explained``: effects were chosen and remove at least ``partly_share`` (30 %);
 * ``unexplained``: a gap that no candidate set removes 30 % of (verdict ``unexplained``).
 
@@ -344,7 +346,8 @@ def verdict_of(settings: DiagnosisSettings, before, after, effects: list[str]) -
         share = float(np.clip((before.ratio**2 - after.ratio**2) / excess, 0.0, 1.0))
     if before.ratio <= before.threshold:
         return "no_gap", "none", 0.0
-    if effects and (after.ratio <= after.threshold or share >= settings.explained_share):
+    near = after.ratio - 1.0 <= 2.0 * (after.threshold - 1.0)
+    if effects and (after.ratio <= after.threshold or (share >= settings.explained_share and near)):
         return "explained", "+".join(effects), share
     if effects and share >= settings.partly_share:
         return "partly_explained", "+".join(effects), share
