@@ -35,7 +35,7 @@ def _check_figures(folder, names):
 
 @pytest.mark.parametrize("problem", ["timedomain", "admittance"])
 def test_a_tiny_run_gets_its_figures_and_report(tmp_path, problem):
-    run(compose_config([f"problem={problem}", "budget=200", "checkpoint=false"]), tmp_path)
+    run(compose_config([f"problem={problem}", "optimizer=genesis", "budget=200", "checkpoint=false"]), tmp_path)
     rec, report = _check_figures(tmp_path, EXPECTED[problem])
     assert report.startswith(f"# {problem} / genesis, seed 0")
     assert "| parameter | estimate | truth | error |" in report

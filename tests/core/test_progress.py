@@ -48,7 +48,7 @@ def test_progress_must_be_auto_true_or_false(tmp_path):
 
 
 def _tiny(*extra):
-    return compose_config(["budget=200", "figures=false", "checkpoint=false", *extra])
+    return compose_config(["optimizer=genesis", "budget=200", "figures=false", "checkpoint=false", *extra])
 
 
 def test_silent_when_stderr_is_not_a_terminal(tmp_path, capfd):

@@ -98,7 +98,13 @@ def test_unknown_motor_and_source():
         zoo.make_zoo_dataset("alonge_1kw", source="matlab")
 
 
-def test_independent_source_refuses_what_it_cannot_simulate(tmp_path):
-    # alonge_1kw is not a preset of synthetic.independent (if that module exists at all)
-    with pytest.raises(NotImplementedError, match="independent"):
-        zoo.make_zoo_dataset("alonge_1kw", out=tmp_path, source="independent")
+def test_independent_source_simulates_a_zoo_motor_with_its_referred_truth(tmp_path):
+    """The independent plant now takes any zoo motor (tests/studies/test_zoo.py checks the
+    adapter in detail): the truth it writes is the zoo's referred parameter set."""
+    import yaml
+
+    zoo.make_zoo_dataset("alonge_1kw", out=tmp_path, source="independent", duration=0.3)
+    truth = yaml.safe_load((tmp_path / "truth.yaml").read_text())
+    want = zoo.project_parameters(zoo.get_motor("alonge_1kw"))
+    for k in ("Rs", "Ls", "Le", "Rr", "J"):
+        assert truth["parameters"][k] == pytest.approx(want[k], rel=1e-9), k

@@ -99,7 +99,7 @@ def test_file_path_gives_same_estimate_as_memory(tmp_path):
     assert proc.returncode == 0, proc.stderr
     base = ["+experiment=table1", "budget=1500", "seed=3", "polish=true", "polish_budget=300"]
     mem = run(compose_config(base), tmp_path / "mem").record
-    disk = run(compose_config(base + [f"data.path={ds}", "+use_motor_bounds_with_data=true"]),
+    disk = run(compose_config(base + [f"data.path={ds}", "use_motor_bounds_with_data=true"]),
                tmp_path / "disk").record
     assert disk["estimate"] == mem["estimate"]
     assert disk["truth"] == {k: v for k, v in mem["truth"].items() if k != "p"}
