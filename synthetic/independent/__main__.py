@@ -39,6 +39,10 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--ideal-supply", action="store_true", help="no grid imperfections / fixed PWM ramp")
     ap.add_argument("--no-speed", action="store_true", help="record without a speed column")
     ap.add_argument("--torque", action="store_true", help="record the shaft torque")
+    ap.add_argument("--fifth-harmonic", type=float, default=None,
+                    help="grid voltage's 5th harmonic, fraction of the fundamental (dol; default: drawn)")
+    ap.add_argument("--dc-resistance", action="store_true",
+                    help="write the stator's DC resistance into meta.yaml (stator_dc_resistance)")
     ap.add_argument("--blind", action="store_true", help="draw motor spread, scenario, effects and noise from --seed")
     return ap
 
@@ -59,6 +63,10 @@ def main(argv=None) -> int:
                              sample_rate=args.sample_rate, stop=args.stop, forms=forms,
                              ideal_supply=args.ideal_supply, oversampling=args.oversampling,
                              has_speed=not args.no_speed, has_torque=args.torque)
+            if args.fifth_harmonic is not None and spec["scenario"]["kind"] == "dol":
+                spec["scenario"]["h5"] = float(args.fifth_harmonic)
+            if args.dc_resistance:
+                spec["meta"]["dc_resistance"] = True
         t0 = time.perf_counter()
         ds = make_dataset(spec)
     except ValueError as exc:
