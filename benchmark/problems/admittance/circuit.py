@@ -5,7 +5,7 @@ Conventions (stated once)
 * Per phase, RMS phasors, SI units; impedances in ohm *at the test frequency* (reactances are
   ``X = 2*pi*f*L``). Three phases: powers carry the factor 3.
 * Slip ``s = (n_sync - n)/n_sync``: motoring ``0 < s < 1``, generating ``s < 0``, braking ``s > 1``.
-* Circuit (MODEL.md section 5, LINDSAY_BARTON.md): stator ``Z1 = R1t + jX1`` where ``R1t = R1 +
+* Circuit (Lindsay and Barton): stator ``Z1 = R1t + jX1`` where ``R1t = R1 +
   R1sigma`` (copper plus leakage-flux core loss; at one frequency only the sum acts), series
   magnetising branch ``Z0 = R0 + jX0``, rotor
   ``Z2(s) = R2/s + R2sigma*sign(s) + j*(X2 - X3*|s|)``. The 6-parameter model is
@@ -271,7 +271,7 @@ def bilinear_to_circuit(a, b, c, tie_x1_x2: bool = False) -> dict[str, float]:
     ``A = 1/a``, ``B = c/a``, ``C = b/a``, ``D = A*C - B = Z0^2/R2``. With ``X1``, ``X2`` free:
     ``Z0 = sqrt(R2*D)`` and ``R0 = R2*Re(C)`` give ``sqrt(R2) = Re(sqrt(D))/Re(C)`` (exact, but it
     leans on the small ``R0``, so it is ill-conditioned with noise). With the tie ``X1 = X2``:
-    ``R2 = Im(A)/Im(C)`` (LINDSAY_BARTON.md). Returns a dict with ``R1t, X1, R2, X2, R0, X0``;
+    ``R2 = Im(A)/Im(C)`` (Lindsay and Barton (1972)). Returns a dict with ``R1t, X1, R2, X2, R0, X0``;
     values may be non-physical (negative, NaN) for data that do not come from such a circuit.
     """
     A = 1.0 / a

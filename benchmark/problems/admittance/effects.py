@@ -1,6 +1,6 @@
 """Steady-state (slip-sweep) effects: each one class, acting on a :class:`SweepCircuit`.
 
-The diagnosis's base model is the 6-parameter circuit with ``X1 = X2`` (MODEL.md section 6):
+The diagnosis's base model is the 6-parameter circuit with ``X1 = X2`` (the effect catalogue):
 ``Z1 = R1t + jX``, ``Z0 = R0 + jX0``, ``Z2 = R2/s + jX``. An effect is what that circuit leaves out.
 Both sides of an effect act on the same generalised circuit, :class:`SweepCircuit`, which
 evaluates the input admittance of every reading (slip ``s``, phase voltage ``V``) with
@@ -349,7 +349,7 @@ class IronLoss(AdmittanceEffect):
 
 
 class TemperatureDrift(AdmittanceEffect):
-    """The windings warm during the session (one-body thermal model, copper law, MODEL.md
+    """The windings warm during the session (one-body thermal model, copper law, the model
     section 5), so R1 and R2 drift with acquisition time.
 
     Size: the winding temperature rise from the first to the last reading, K. Realistic 3-15 K
@@ -462,7 +462,7 @@ class LeakageCoreLoss(AdmittanceEffect):
     (``tanh(s/smooth)``, default 0: a hard sign).
 
     Augmentation: ``R2sigma`` (extra ``R2sigma_pu`` = R2sigma/R2). ``R1sigma`` acts only with
-    ``R1`` at one frequency (LINDSAY_BARTON.md), so it is left in the base's ``R1t``.
+    ``R1`` at one frequency (Lindsay and Barton (1972)), so it is left in the base's ``R1t``.
     """
 
     name = "leakage_core_loss"

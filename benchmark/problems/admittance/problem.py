@@ -1,4 +1,4 @@
-"""The steady-state identification problem of Lindsay and Barton (MODEL.md section 5).
+"""The steady-state identification problem of Lindsay and Barton (Lindsay and Barton).
 
 Cost
 ----
@@ -17,7 +17,7 @@ Searched parameters (ohm at the test frequency, referred to the reference temper
 ``R1_total = R1 + R1sigma``: at one frequency and temperature the admittance sees only the sum.
 When the data give the stator DC resistance, :meth:`AdmittanceProblem.estimate` also reports
 ``R1`` (the DC value referred to the reference temperature) and ``R1sigma = R1_total - R1``;
-otherwise it reports ``R1_total`` only (LINDSAY_BARTON.md, identifiability).
+otherwise it reports ``R1_total`` only (Lindsay and Barton (1972), identifiability).
 
 Temperature compensation
 ------------------------

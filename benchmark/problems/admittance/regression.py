@@ -36,7 +36,7 @@ def bilinear_regression(s, Y, weight=None, model: int = 6, warp0=(0.05, 0.02)) -
     """The "E" route: Sanathanan-Koerner regression of the bilinear form, mapped back to the circuit.
 
     For ``model=8`` the warp ratios ``rho = R2sigma/R2`` and ``xi = X3/R2`` are found by an outer
-    least-squares search around the linear fit (variable projection, LINDSAY_BARTON.md). Returns
+    least-squares search around the linear fit (variable projection). Returns
     ``{"free": circuit, "tied": circuit, "rho", "xi", "rms"}``: the circuit (keys ``R1_total, X1, R2,
     X2, R0, X0, R2sigma, X3``) from the exact mapping with ``X1``, ``X2`` free (it reproduces the fitted
     curve, but leans on the small ``R0`` and is ill-conditioned with noise; it may be non-physical)

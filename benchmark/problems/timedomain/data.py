@@ -1,4 +1,4 @@
-"""Time-domain data sets (``kind: startup``, MODEL.md section 7): load, validate, write.
+"""Time-domain data sets (``kind: startup``, the README's Data sets): load, validate, write.
 
 A folder holds ``meta.yaml``, one or more ``startup*.csv`` and optionally ``stop*.csv``.
 Start-up columns: ``t``; voltages ``v_alpha, v_beta`` or phase ``v_r, v_s, v_t``; currents

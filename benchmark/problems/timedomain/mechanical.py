@@ -1,4 +1,4 @@
-"""Mechanical pre-identification from the free stop (MODEL.md section 3).
+"""Mechanical pre-identification from the free stop (the free stop).
 
 With no supply and the currents gone, ``dw_M/dt = -w_M/tau_m - fc/J`` for ``w_M > 0``
 (mechanical speed; ``fc/J`` in rad/s^2).

@@ -1,4 +1,4 @@
-"""Induction-motor model of Alonge et al. (1998), MODEL.md section 1.
+"""Induction-motor model of Alonge et al. (1998), the model.
 
 Conventions, stated once: stator-fixed alpha-beta frame with the amplitude-invariant Clarke
 transform (peak-valued quantities), SI units, ``w`` is the *electrical* rotor speed

@@ -1,4 +1,4 @@
-"""The time-domain identification problem of Alonge et al. (MODEL.md sections 3-4).
+"""The time-domain identification problem of Alonge et al. (the paper).
 
 Cost (eqs. 13-15), summed over every start-up record of the data set::
 

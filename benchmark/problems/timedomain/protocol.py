@@ -1,4 +1,4 @@
-"""The start-up / free-stop experiment of Alonge et al. (MODEL.md section 2), and the
+"""The start-up / free-stop experiment of Alonge et al. (the start-up/stop experiment), and the
 amplitude-invariant Clarke transform.
 
 The inverter applies switch states ``(aR, aS, aT)`` (1 = upper switch on); each state of the

@@ -10,7 +10,7 @@ import numpy as np
 
 # -- the reference implementations -------------------------------------------------------------
 def _motor_terms(theta: np.ndarray, p: float):
-    """Model coefficients from physical parameters (MODEL.md section 1), written out here."""
+    """Model coefficients from physical parameters (the model), written out here."""
     Rs, Ls, Le, Rr, J, fv, fc = (np.asarray(theta, float)[:, i] for i in range(7))
     Lr = Ls
     Lm = np.sqrt(Lr * (Ls - Le))

@@ -293,7 +293,7 @@ def test_stalled_torque_term_and_measured_normalisation():
     assert len(r) == 2 * 43 + 1 and np.max(np.abs(r)) < 1e-8
     T_stalled = p.data.torque[np.argmin(np.abs(p.data.slip - 1))]
     assert p.stalled_torque(x[None])[0] == pytest.approx(T_stalled, rel=1e-9)
-    # a 10 % too large R2sigma raises the stalled torque (it pins R2sigma, LINDSAY_BARTON.md)
+    # a 10 % too large R2sigma raises the stalled torque (it pins R2sigma)
     x2 = x.copy()
     x2[p.parameter_names.index("R2sigma")] *= 1.1
     assert p.stalled_torque(x2[None])[0] > T_stalled
@@ -301,7 +301,7 @@ def test_stalled_torque_term_and_measured_normalisation():
 
 def test_r0_is_weakly_determined_and_the_spread_shows_it():
     """Over noise realisations at 0.3 % of full scale, R0 scatters by tens of per cent while X0 and
-    the tied leakage reactance stay within a few per cent (LINDSAY_BARTON.md)."""
+    the tied leakage reactance stay within a few per cent (Lindsay and Barton (1972))."""
     errs = []
     for seed in range(5):
         p = build_problem(

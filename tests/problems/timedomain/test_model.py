@@ -16,7 +16,7 @@ from benchmark.problems.timedomain.simulation import simulate_states, startup_co
 
 
 def reference_rhs(motor: InductionMotor, v_of_t):
-    """MODEL.md section 1 written out directly (no shared code with the compiled model)."""
+    """the model written out directly (no shared code with the compiled model)."""
     Rs, Ls, Le, Rr, J, fv, p = motor.Rs, motor.Ls, motor.Le, motor.Rr, motor.J, motor.fv, motor.p
     Lr = Ls
     Lm = math.sqrt(Lr * (Ls - Le))
@@ -88,7 +88,7 @@ def test_rk4_matches_adaptive_reference(paper_motor, waveform):
 
 
 def test_paper_transients(paper_records):
-    """MODEL.md section 2: start-up current peaks near 28 A; stop from ~314 to ~266 rad/s in 0.1 s."""
+    """the start-up/stop experiment: start-up current peaks near 28 A; stop from ~314 to ~266 rad/s in 0.1 s."""
     s, st = paper_records["startup"], paper_records["stop"]
     peak = np.max(np.hypot(s["i_alpha"], s["i_beta"]))
     assert 26.0 < peak < 30.0

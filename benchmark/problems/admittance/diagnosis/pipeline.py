@@ -1,6 +1,6 @@
 """Sim-to-real gap diagnosis for the slip sweep (the admittance problem).
 
-1. Identify the base model: the 6-parameter circuit with ``X1 = X2`` (MODEL.md section 6),
+1. Identify the base model: the 6-parameter circuit with ``X1 = X2`` (the effect catalogue),
    i.e. ``R1t, X, R2, R0, X0``, by the Sanathanan-Koerner regression of its bilinear form
    (the "E" route, :func:`benchmark.problems.admittance.problem.bilinear_regression`) and a least-squares
    polish. No temperature compensation: a warming is a candidate effect, not part of the base.
