@@ -2,7 +2,7 @@
 diagnosis evaluated blind, one data source at a time.
 
 The sources, draws, loop and scores live in :mod:`benchmark.analysis.blind`; this entry point
-composes the config (``conf/blind.yaml``) and runs one source.
+composes the config (``conf/blind.yaml``), makes the typed settings once and runs one source.
 """
 
 from __future__ import annotations
@@ -11,14 +11,14 @@ import sys
 
 import hydra
 
-from benchmark.analysis.blind import run_source
+from benchmark.analysis.blind import BlindSettings, run_source
 from benchmark.core.cli import run_hydra_main, user_errors
 
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="blind")
 @user_errors
 def main(cfg) -> None:
-    run_source(cfg, ("python -m benchmark.blind " + " ".join(sys.argv[1:])).strip())
+    run_source(BlindSettings.from_run(cfg), ("python -m benchmark.blind " + " ".join(sys.argv[1:])).strip())
 
 
 if __name__ == "__main__":

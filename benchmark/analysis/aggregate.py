@@ -89,6 +89,17 @@ def _grid(runs: list[Run], n=400) -> np.ndarray:
     return np.unique(np.round(np.geomspace(1, top, n)))
 
 
+def _finish(fig, ax, figdir: Path, stem: str) -> str:
+    """Grid, legend outside the axes (the curves stay visible), PNG and SVG; the PNG's path
+    relative to the output folder."""
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(figdir / f"{stem}.{ext}", dpi=130)
+    return f"figures/{stem}.png"
+
+
 def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]:
     from benchmark.core.plotting import new_figure
 
@@ -137,12 +148,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         ax.set_xlabel("evaluations (counted by the harness)")
         ax.set_ylabel(f"best cost so far (cost units of {grp[0].runs[0].rec['problem']})")
         ax.set_title(f"{group}: median and quartiles over runs", fontsize=10)
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # outside: curves stay visible
-        fig.tight_layout()
-        for ext in ("png", "svg"):
-            fig.savefig(figdir / f"convergence_{slug}.{ext}", dpi=130)
-        made[group]["convergence"] = f"figures/convergence_{slug}.png"
+        made[group]["convergence"] = _finish(fig, ax, figdir, f"convergence_{slug}")
 
         # ECDF of (run, target) pairs
         fig, ax = new_figure(figsize=(9, 4.5))
@@ -167,12 +173,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
             f"D from the cost range down to {ECDF_FINEST:g} max(|f*|, {NEGLIGIBLE:g} range)",
             fontsize=9,
         )
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # outside: curves stay visible
-        fig.tight_layout()
-        for ext in ("png", "svg"):
-            fig.savefig(figdir / f"ecdf_{slug}.{ext}", dpi=130)
-        made[group]["ecdf"] = f"figures/ecdf_{slug}.png"
+        made[group]["ecdf"] = _finish(fig, ax, figdir, f"ecdf_{slug}")
     return made
 
 

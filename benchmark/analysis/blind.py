@@ -24,26 +24,109 @@ band: status ``no_gap``) are left out of the score and listed.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import shutil
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from omegaconf import OmegaConf, open_dict
+from omegaconf import DictConfig, OmegaConf, open_dict
 
 from benchmark.core.effects import load_effects
 from benchmark.core.io import write_text_atomic, write_yaml_atomic
 
-FORM_CHOICES = {
-    "double_cage": lambda rng: {"ladder": bool(rng.integers(2)), "tau2": float(rng.uniform(0.002, 0.008))},
-    "main_saturation": lambda rng: {"exponent": float(rng.choice([2.0, 4.0, 6.0]))},
-    "leakage_saturation": lambda rng: {"exponent": float(rng.choice([1.5, 2.0, 3.0]))},
-    "inverter_drop": lambda rng: {"smooth": float(rng.choice([0.0, 0.02, 0.05]))},
-}
 MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
 #: Effects a time-domain base model of case 2 already holds (never an injected "effect").
 IN_BASE = {2: ("coulomb_friction",), 1: ()}
+
+
+def _float_or_none(v) -> float | None:
+    return None if v is None else float(v)
+
+
+@dataclass(frozen=True)
+class BlindSettings:
+    """What a blind evaluation draws, where it works and what it writes; made once from the
+    composed configuration (``conf/blind.yaml``, ``conf/blind_admittance.yaml``) by
+    :meth:`from_run` in the entry points.
+
+    Attributes
+    ----------
+    source : ``own``, ``plant`` or ``motulator`` (time domain; unused by the slip sweep).
+    n : number of data sets.
+    seed : master seed of the draws; each set gets its own stream spawned from it.
+    free_share : share of effect-free sets (the first ones), or None: each set is effect-free
+        with the weight of one effect among the drawn outcomes (the slip sweep).
+    two_share : share of the other sets that carry two effects at once (with ``free_share``).
+    vary_form : vary each injected effect's form (the effect's own :meth:`random_form`).
+    vary_motor : relative spread of the motor's parameters, each scaled by exp(U(-v, v)).
+    exclude_effects : effects never injected.
+    base_case : the diagnosis's time-domain base model case (``diagnosis.base_case``; 2 holds
+        Coulomb friction, which is then never injected), None when the config has none.
+    workdir : folder of the data sets (``sets/``), their truth (``truth/``) and the diagnoses.
+    out : folder of the scores (``confusion.md``, ``blind.json``, ``config.yaml``).
+    resume, report_only : (time domain) reuse the rows of sets already diagnosed in ``workdir``;
+        score only those (an interrupted run).
+    duration, sample_rate, rated_power, motulator_stop : the motulator source's start-up (s),
+        sampling rate (Hz), rated power (W; load-torque sizes are fractions of rated torque) and
+        whether it also records a stop (None: not configured).
+    plant_duration, plant_stop : the plant source's start-up (s; None: the plant's own draw) and
+        whether it also records a stop.
+    tuned_on : one line on what the diagnosis's thresholds were tuned on, for the report.
+    run : the composed configuration (plain, resolved); each set's generator and diagnosis
+        configurations are copies of it (:func:`generator_config`, :func:`diagnosis_config`),
+        and it is written next to the scores.
+    """
+
+    n: int
+    seed: int
+    workdir: Path
+    out: Path
+    source: str = "own"
+    free_share: float | None = None
+    two_share: float = 0.0
+    vary_form: bool = True
+    vary_motor: float = 0.0
+    exclude_effects: tuple[str, ...] = ()
+    base_case: int | None = None
+    resume: bool = True
+    report_only: bool = False
+    duration: float | None = None
+    sample_rate: float | None = None
+    rated_power: float | None = None
+    motulator_stop: bool = True
+    plant_duration: float | None = None
+    plant_stop: bool = True
+    tuned_on: str = ""
+    run: Mapping = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def from_run(cls, run: Mapping) -> BlindSettings:
+        """The settings of a composed configuration (a plain mapping or a DictConfig)."""
+        if isinstance(run, DictConfig):
+            run = OmegaConf.to_container(run, resolve=True)
+        diagnosis = run.get("diagnosis") or {}
+        return cls(
+            n=int(run["n"]), seed=int(run["seed"]), workdir=Path(run["workdir"]), out=Path(run["out"]),
+            source=str(run.get("source", "own")), free_share=_float_or_none(run.get("free_share")),
+            two_share=float(run.get("two_share") or 0.0),
+            vary_form=bool(run.get("vary_form", True)), vary_motor=float(run.get("vary_motor") or 0.0),
+            exclude_effects=tuple(str(e) for e in run.get("exclude_effects") or ()),
+            base_case=None if diagnosis.get("base_case") is None else int(diagnosis["base_case"]),
+            resume=bool(run.get("resume", True)), report_only=bool(run.get("report_only") or False),
+            duration=_float_or_none(run.get("duration")), sample_rate=_float_or_none(run.get("sample_rate")),
+            rated_power=_float_or_none(run.get("rated_power")), motulator_stop=bool(run.get("motulator_stop", True)),
+            plant_duration=_float_or_none(run.get("plant_duration") or None),
+            plant_stop=bool(run.get("plant_stop", True)), tuned_on=str(run.get("tuned_on", "")),
+            run=copy.deepcopy(dict(run)))
+
+    @property
+    def in_base(self) -> tuple[str, ...]:
+        """Effects the diagnosis's base model already holds (never injected)."""
+        return IN_BASE.get(self.base_case, ())
 
 
 def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
@@ -57,94 +140,115 @@ def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
     return [max(0.0, c - h), min(1.0, c + h)]
 
 
-def n_effects_of(i: int, cfg) -> int:
+def n_effects_of(i: int, settings: BlindSettings) -> int:
     """Effect count of set ``i``: every ``1/free_share``-th set is effect-free, a share
     ``two_share`` of the others carry two effects (deterministic, so that each count is met)."""
-    n = int(cfg.n)
-    n_free = int(round(float(cfg.free_share) * n))
+    n = int(settings.n)
+    n_free = int(round(float(settings.free_share) * n))
     if i < n_free:
         return 0
-    n_two = int(round(float(cfg.two_share) * (n - n_free)))
+    n_two = int(round(float(settings.two_share) * (n - n_free)))
     return 2 if i - n_free < n_two else 1
 
 
-def draw_sets(cfg, problem: str = "timedomain", motor_keys=MOTOR_KEYS, form_choices=None, exclude=()) -> list[dict]:
-    """The ``own`` draws: effects (none, one or two), sizes, forms, motor spread, noise seed.
+def draw_sets(settings: BlindSettings, problem: str = "timedomain", motor_keys=MOTOR_KEYS, exclude=()) -> list[dict]:
+    """The ``own`` draws: effects (none, one or two), sizes, forms (each effect's own
+    :meth:`~benchmark.core.effects.Effect.random_form`), motor spread, noise seed.
 
-    Each set has its own random stream (spawned from ``cfg.seed``), so a set's draw does not
+    Each set has its own random stream (spawned from ``settings.seed``), so a set's draw does not
     depend on how many sets come before it."""
-    form_choices = FORM_CHOICES if form_choices is None else form_choices
     effects = load_effects(problem)
-    names = sorted(n for n in effects if n not in exclude and n not in list(cfg.get("exclude_effects") or []))
-    seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
+    names = sorted(n for n in effects if n not in exclude and n not in settings.exclude_effects)
+    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
     draws = []
     for i, ss in enumerate(seeds):
         rng = np.random.default_rng(ss)
-        k = n_effects_of(i, cfg) if "free_share" in cfg else int(rng.random() >= 1.0 / (1 + len(names)))
+        if settings.free_share is not None:
+            k = n_effects_of(i, settings)
+        else:
+            k = int(rng.random() >= 1.0 / (1 + len(names)))
         chosen = sorted(str(e) for e in rng.choice(names, size=k, replace=False)) if k else []
         d = {"index": i, "effects": chosen, "noise_seed": int(rng.integers(2**31 - 1))}
-        spread = float(cfg.vary_motor)
+        spread = settings.vary_motor
         d["motor_scale"] = {m: float(np.exp(rng.uniform(-spread, spread))) for m in motor_keys}
         d["size"], d["form"] = {}, {}
         for e in chosen:
             lo, hi = effects[e].realistic
             d["size"][e] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-            if cfg.vary_form:
-                if e in form_choices:
-                    d["form"][e] = form_choices[e](rng)
-                elif hasattr(effects[e], "random_form"):
-                    d["form"][e] = effects[e].random_form(rng)
+            if settings.vary_form:
+                d["form"][e] = effects[e].random_form(rng)
         d["effect"] = "+".join(chosen) or "none"  # the single-effect label of older callers
         draws.append(d)
     return draws
 
 
-def set_config(cfg, d: dict):
-    """The synthetic configuration of one ``own`` draw (a copy of cfg)."""
-    c = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
+def _run_copy(settings: BlindSettings) -> DictConfig:
+    return OmegaConf.create(copy.deepcopy(dict(settings.run)))
+
+
+def generator_config(settings: BlindSettings, d: dict, scale_motor=None, no_effect: list | None = None) -> DictConfig:
+    """The configuration the synthetic generator gets for draw ``d``: a copy of the composed
+    configuration with the draw's motor spread (``scale_motor(parameters, motor_scale)``, default:
+    each parameter times its factor), noise seed, effects (``no_effect`` when there are none),
+    sizes and forms, and no data folder."""
+    c = _run_copy(settings)
     with open_dict(c):
-        for k, s in d["motor_scale"].items():
-            c.motor.parameters[k] = float(c.motor.parameters[k]) * s
+        if scale_motor is None:
+            for k, s in d["motor_scale"].items():
+                c.motor.parameters[k] = float(c.motor.parameters[k]) * s
+        else:
+            scale_motor(c.motor.parameters, d["motor_scale"])
         c.noise.seed = d["noise_seed"]
-        c.effects = list(d["effects"])
+        c.effects = list(d["effects"]) or list(no_effect or [])
         c.effect_size = dict(d["size"])
         c.effect_form = {k: dict(v) for k, v in d["form"].items()}
         c.data.path = None
     return c
 
 
+def diagnosis_config(settings: BlindSettings, folder: Path) -> DictConfig:
+    """The configuration the diagnosis gets for a data folder: a copy of the composed
+    configuration pointed at ``folder``, with no effects of its own and no figures."""
+    c = _run_copy(settings)
+    with open_dict(c):
+        c.data.path = str(folder)
+        c.effects, c.effect_size, c.effect_form = [], {}, {}
+        c.figures = False
+    return c
+
+
 # -- sources ---------------------------------------------------------------------------------
-def own_source(cfg):
+def own_source(settings: BlindSettings):
     """(draws, make(d, folder)) of the project's own synthetic plant."""
     from synthetic.timedomain import generate
 
-    draws = draw_sets(cfg, exclude=IN_BASE[int(cfg.diagnosis.base_case)])
+    draws = draw_sets(settings, exclude=settings.in_base)
 
     def make(d, folder):
-        generate(set_config(cfg, d), folder)
+        generate(generator_config(settings, d), folder)
 
     return draws, make
 
 
-def plant_source(cfg):
+def plant_source(settings: BlindSettings):
     """(draws, make) of the independent plant: its own motors, scenarios, sizes, forms, noise."""
     from synthetic.independent import EFFECTS, draw_blind_set, make_dataset, write_dataset
 
     ours = set(load_effects("timedomain"))
-    skip = set(IN_BASE[int(cfg.diagnosis.base_case)]) | set(cfg.get("exclude_effects") or [])
-    seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
+    skip = set(settings.in_base) | set(settings.exclude_effects)
+    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
     draws = []
     for i, ss in enumerate(seeds):
         rng = np.random.default_rng(ss)
-        k = n_effects_of(i, cfg)
+        k = n_effects_of(i, settings)
         kind = str(rng.choice(["dol", "six_step", "pwm"], p=[0.4, 0.35, 0.25]))
         pool = sorted(e for e in EFFECTS if e in ours and e not in skip
                       and not (EFFECTS[e].inverter_only and kind == "dol"))
         chosen = sorted(str(e) for e in rng.choice(pool, size=k, replace=False)) if k else []
         spec = draw_blind_set(rng, effects=chosen, scenario=kind)
-        if cfg.get("plant_duration"):  # default: the plant's own draw (0.8-1.5 s: big motors need it)
-            spec["scenario"]["duration"] = float(cfg.plant_duration)
-        if not cfg.get("plant_stop", True):
+        if settings.plant_duration:  # default: the plant's own draw (0.8-1.5 s: big motors need it)
+            spec["scenario"]["duration"] = settings.plant_duration
+        if not settings.plant_stop:
             spec["stop"] = None
         draws.append({"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]})
 
@@ -157,20 +261,21 @@ def plant_source(cfg):
 MOTULATOR_EFFECTS = ("main_saturation", "two_mass", "load_torque")
 
 
-def motulator_source(cfg):
+def motulator_source(settings: BlindSettings):
     """(draws, make) of motulator: the preset motor spread, dol or six-step, its three effects."""
     from synthetic.motulator_source import make_motulator_dataset
 
-    base = OmegaConf.to_container(cfg.motor, resolve=True)
-    seeds = np.random.SeedSequence(int(cfg.seed)).spawn(int(cfg.n))
+    base = copy.deepcopy(dict(settings.run["motor"]))
+    spread = settings.vary_motor
+    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
     draws = []
     for i, ss in enumerate(seeds):
         rng = np.random.default_rng(ss)
-        k = n_effects_of(i, cfg)
+        k = n_effects_of(i, settings)
         chosen = sorted(str(e) for e in rng.choice(MOTULATOR_EFFECTS, size=k, replace=False)) if k else []
         par = dict(base["parameters"])
         for m in MOTOR_KEYS:
-            par[m] = float(par[m]) * float(np.exp(rng.uniform(-cfg.vary_motor, cfg.vary_motor)))
+            par[m] = float(par[m]) * float(np.exp(rng.uniform(-spread, spread)))
         opts = {}
         for e in chosen:
             if e == "main_saturation":
@@ -182,10 +287,10 @@ def motulator_source(cfg):
                 form = str(rng.choice(["step", "constant", "quadratic"]))
                 opts[e] = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
                 if form == "step":
-                    opts[e]["time"] = float(rng.uniform(0.3, 0.6) * float(cfg.duration))
+                    opts[e]["time"] = float(rng.uniform(0.3, 0.6) * settings.duration)
         scenario = str(rng.choice(["dol", "six_step"]))
         motor = {"parameters": par, "pole_pairs": int(base["pole_pairs"]), "frequency": 50.0,
-                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": float(cfg.rated_power)}
+                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": settings.rated_power}
         noise = {"current_std": float(rng.uniform(0.02, 0.08)), "current_colored_std": float(rng.uniform(0.0, 0.05)),
                  "speed_std": float(rng.uniform(0.05, 0.2)), "speed_quantum": float(rng.choice([0.0, 0.1, 0.5]))}
         draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
@@ -193,7 +298,7 @@ def motulator_source(cfg):
 
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
-                               float(cfg.duration), float(cfg.sample_rate), bool(cfg.get("motulator_stop", True)))
+                               settings.duration, settings.sample_rate, settings.motulator_stop)
 
     return draws, make
 
@@ -295,112 +400,101 @@ def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) ->
     return "\n".join(lines) + "\n"
 
 
-def diagnose_folder(cfg, folder: Path, outdir: Path) -> dict:
+def diagnose_folder(settings: BlindSettings, folder: Path, outdir: Path) -> dict:
     """The diagnosis of a data folder (its truth already moved away)."""
     from benchmark.core.harness import run_diagnosis
 
-    sc = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
-    with open_dict(sc):
-        sc.data.path = str(folder)
-        sc.effects, sc.effect_size, sc.effect_form = [], {}, {}
-        sc.figures = False
-    return run_diagnosis(sc, outdir)
+    return run_diagnosis(diagnosis_config(settings, folder), outdir)
 
 
-def run_source(cfg, command: str) -> dict:
-    """Make, hide the truth of, and diagnose every set of ``cfg.source``; write the scores to
-    ``cfg.out/<source>``."""
-    source = str(cfg.source)
+def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dict:
+    """Make set ``d`` into ``work/sets/set_NNN`` (``make(d, folder)``), move its ``truth.yaml``
+    to ``work/truth`` (if it has one), then diagnose the folder; the diagnosis document."""
+    name = f"set_{d['index']:03d}"
+    folder = work / "sets" / name
+    if folder.exists():
+        shutil.rmtree(folder)
+    make(d, folder)
+    # the truth leaves the data folder before the diagnosis sees it
+    (work / "truth").mkdir(parents=True, exist_ok=True)
+    if (folder / "truth.yaml").exists():
+        (folder / "truth.yaml").replace(work / "truth" / f"{name}.yaml")
+    return diagnose_folder(settings, folder, work / "diagnoses" / name)
+
+
+def score_row(index: int, effects: list, doc: dict) -> dict:
+    """One scored row: the injected ``effects`` against the diagnosis document ``doc``."""
+    return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
+            "predicted": predicted_label(doc), "status": doc["status"], "verdict": doc["verdict"],
+            "effects": list(doc["effects"]), "explained_share": float(doc["explained_share"]),
+            "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
+            "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
+            "invisible": bool(effects) and doc["status"] == "no_gap"}
+
+
+def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: str, title: str) -> dict:
+    """Summarise ``rows`` and write ``confusion.md``, ``blind.json`` and ``config.yaml`` to ``out``."""
+    summary = summarise(rows)
+    out.mkdir(parents=True, exist_ok=True)
+    text = render(summary, rows, command, title, settings.tuned_on)
+    write_text_atomic(out / "confusion.md", text)
+    doc = {"summary": summary, "sets": rows}
+    write_text_atomic(out / "blind.json", json.dumps(doc, indent=1, default=float) + "\n")
+    write_yaml_atomic(out / "config.yaml", copy.deepcopy(dict(settings.run)))
+    print(text)
+    return summary
+
+
+def run_source(settings: BlindSettings, command: str) -> dict:
+    """Make, hide the truth of, and diagnose every set of ``settings.source``; write the scores
+    to ``settings.out/<source>``."""
+    source = settings.source
     if source not in SOURCES:
         from benchmark.core.errors import ConfigError
 
         raise ConfigError(f"source: one of {sorted(SOURCES)}, got {source!r}")
-    draws, make = SOURCES[source](cfg)
-    work = Path(cfg.workdir) / source
-    out = Path(cfg.out) / source
+    draws, make = SOURCES[source](settings)
+    work = settings.workdir / source
     rows = []
     results_file = work / "rows.jsonl"
     done = {}
-    if results_file.exists() and cfg.get("resume", True):
+    if results_file.exists() and settings.resume:
         for line in results_file.read_text().splitlines():
             r = json.loads(line)
             done[r["index"]] = r
     work.mkdir(parents=True, exist_ok=True)
-    if cfg.get("report_only"):  # score the sets diagnosed so far (an interrupted run)
+    if settings.report_only:  # score the sets diagnosed so far (an interrupted run)
         draws = [d for d in draws if d["index"] in done]
     for d in draws:
         if d["index"] in done:
             rows.append(done[d["index"]])
             continue
-        name = f"set_{d['index']:03d}"
-        folder = work / "sets" / name
-        if folder.exists():
-            shutil.rmtree(folder)
-        make(d, folder)
-        # the truth leaves the data folder before the diagnosis sees it
-        (work / "truth").mkdir(parents=True, exist_ok=True)
-        if (folder / "truth.yaml").exists():
-            (folder / "truth.yaml").replace(work / "truth" / f"{name}.yaml")
-        doc = diagnose_folder(cfg, folder, work / "diagnoses" / name)
-        truth = label_of(d["effects"])
-        row = {"index": d["index"], "truth": truth, "truth_effects": list(d["effects"]),
-               "predicted": predicted_label(doc), "status": doc["status"], "verdict": doc["verdict"],
-               "effects": list(doc["effects"]), "explained_share": float(doc["explained_share"]),
-               "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
-               "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
-               "invisible": bool(d["effects"]) and doc["status"] == "no_gap",
-               "indistinguishable": doc.get("indistinguishable", []),
-               "wall_time_s": float(doc.get("wall_time_s", math.nan)),
-               "draw": {k: v for k, v in d.items() if k not in ("spec",)}}
+        doc = make_and_diagnose(settings, d, make, work)
+        row = score_row(d["index"], d["effects"], doc)
+        row |= {"indistinguishable": doc.get("indistinguishable", []),
+                "wall_time_s": float(doc.get("wall_time_s", math.nan)),
+                "draw": {k: v for k, v in d.items() if k not in ("spec",)}}
         rows.append(row)
         with open(results_file, "a") as fh:
             fh.write(json.dumps(row, default=float) + "\n")
-        print(f"[{source}] set {d['index']:3d}: truth {truth:<40} -> {row['status']:<16} {row['verdict']:<40} "
+        print(f"[{source}] set {d['index']:3d}: truth {row['truth']:<40} -> {row['status']:<16} {row['verdict']:<40} "
               f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f} ({row['wall_time_s']:.0f} s)", flush=True)
-    summary = summarise(rows)
-    out.mkdir(parents=True, exist_ok=True)
     title = f"# Blind evaluation of the time-domain diagnosis: source `{source}`"
-    text = render(summary, rows, command, title, str(cfg.tuned_on))
-    write_text_atomic(out / "confusion.md", text)
-    doc = {"summary": summary, "sets": rows}
-    write_text_atomic(out / "blind.json", json.dumps(doc, indent=1, default=float) + "\n")
-    write_yaml_atomic(out / "config.yaml", OmegaConf.to_container(cfg, resolve=True))
-    print(text)
-    return summary
+    return write_scores(settings, rows, settings.out / source, command, title)
 
 
 # -- the slip-sweep evaluation (single effect per set) -------------------------------------
-def run_blind(cfg, problem: str, draws: list[dict], set_config, generate, title: str, command: str) -> dict:
+def run_blind(settings: BlindSettings, draws: list[dict], set_config, generate, title: str, command: str) -> dict:
     """Make, hide the truth of, and diagnose every drawn set of a synthetic generator
-    (``set_config(cfg, draw)`` -> config, ``generate(config, folder)``); write the scores."""
-    work = Path(cfg.workdir)
-    out = Path(cfg.out)
+    (``set_config(settings, draw)`` -> its configuration, ``generate(config, folder)``); write
+    the scores to ``settings.out``."""
     rows = []
     for d in draws:
-        sc = set_config(cfg, d)
-        name = f"set_{d['index']:03d}"
-        folder = work / "sets" / name
-        generate(sc, folder)
-        (work / "truth").mkdir(parents=True, exist_ok=True)
-        (folder / "truth.yaml").replace(work / "truth" / f"{name}.yaml")
-        doc = diagnose_folder(cfg, folder, work / "diagnoses" / name)
+        doc = make_and_diagnose(settings, d, lambda d, folder: generate(set_config(settings, d), folder),
+                                settings.workdir)
         effects = [] if d["effect"] == "none" else d["effect"].split("+")
-        row = {"index": d["index"], "truth": label_of(effects), "truth_effects": effects,
-               "predicted": predicted_label(doc), "status": doc["status"], "verdict": doc["verdict"],
-               "effects": list(doc["effects"]), "explained_share": float(doc["explained_share"]),
-               "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
-               "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
-               "invisible": bool(effects) and doc["status"] == "no_gap",
-               "wall_time_s": float(doc.get("wall_time_s", math.nan))}
+        row = score_row(d["index"], effects, doc) | {"wall_time_s": float(doc.get("wall_time_s", math.nan))}
         rows.append(row)
         print(f"set {d['index']:3d}: truth {row['truth']:<20} verdict {row['verdict']:<20} ({row['status']}) "
               f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f}", flush=True)
-    summary = summarise(rows)
-    out.mkdir(parents=True, exist_ok=True)
-    text = render(summary, rows, command, title, str(cfg.get("tuned_on", "")))
-    write_text_atomic(out / "confusion.md", text)
-    doc = {"summary": summary, "sets": rows}
-    write_text_atomic(out / "blind.json", json.dumps(doc, indent=1, default=float) + "\n")
-    write_yaml_atomic(out / "config.yaml", OmegaConf.to_container(cfg, resolve=True))
-    print(text)
-    return summary
+    return write_scores(settings, rows, settings.out, command, title)

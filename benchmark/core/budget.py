@@ -222,20 +222,7 @@ class BudgetedProblem:
         self.check_time()
         x = np.asarray(x, float)
         X = np.ascontiguousarray(x[None, :])
-        # residual vectors are not journaled (too large): a resumed run checks the point and
-        # simulates it again
-        with self._counting():
-            n_before = self.replayed_batches
-            if self._replay:
-                self._replayed(KIND_RESIDUALS, X)
-            replayed = self.replayed_batches > n_before
-            r = np.asarray(self.problem.residuals(x), float)
-            # the harness scores every evaluation by the problem's own cost, not the sum of squares
-            cost = self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
-            if not replayed:
-                self._journal(KIND_RESIDUALS, X, np.array([cost]))
-            self._record(X, np.array([cost]))
-        return r
+        return self._counted_residuals(X, lambda: np.asarray(self.problem.residuals(x), float)[None, :])[0]
 
     def residuals_batch(self, X: np.ndarray) -> np.ndarray:
         """Residual vectors of a population (e.g. a finite-difference Jacobian's points), each
@@ -244,12 +231,19 @@ class BudgetedProblem:
         if len(X) > self.remaining:
             raise BudgetExhausted(f"budget of {self.budget} evaluations spent")
         self.check_time()
+        return self._counted_residuals(X, lambda: np.asarray(self.problem.residuals_batch(X), float))
+
+    def _counted_residuals(self, X: np.ndarray, residual_rows) -> np.ndarray:
+        """The residual rows ``residual_rows()`` (one per row of ``X``), counted, scored and
+        journaled. Residual vectors are not journaled (too large): a resumed run checks the
+        points and simulates them again."""
         with self._counting():
             n_before = self.replayed_batches
             if self._replay:
                 self._replayed(KIND_RESIDUALS, X)
             replayed = self.replayed_batches > n_before
-            R = np.asarray(self.problem.residuals_batch(X), float)
+            R = residual_rows()
+            # the harness scores every evaluation by the problem's own cost, not the sum of squares
             cost = np.array([self.problem.cost_from_residuals(r) if np.all(np.isfinite(r)) else np.inf
                              for r in R])
             if not replayed:

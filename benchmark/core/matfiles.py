@@ -12,19 +12,19 @@ import numpy as np
 import pandas as pd
 
 from benchmark.core.errors import DataError
-from benchmark.core.tables import _one_line, read_bytes, select_columns
+from benchmark.core.tables import _one_line, read_bytes, read_table, select_columns
+
+#: The reader of ``.mat`` records: :func:`~benchmark.core.tables.read_table`, which reads a path
+#: ending in ``.mat`` with :func:`read_mat_columns` (one signature for both formats).
+read_mat_table = read_table
 
 
-def read_mat_table(
-    path: Path,
-    alternatives: Sequence[Sequence[str]],
-    optional: Sequence[str] = (),
-    *,
-    max_bytes: int | None = None,
-    warn_unused: bool = False,
-) -> tuple[pd.DataFrame, tuple[str, ...]]:
-    """Read a MATLAB ``.mat`` file whose variables are the columns: :func:`read_table` for
-    what engineers save from MATLAB (``save('startup.mat', 't', 'v_r', ...)``).
+def read_mat_columns(path: Path, alternatives: Sequence[Sequence[str]], optional: Sequence[str],
+                     max_bytes: int | None, warn_unused: bool) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """Read a MATLAB ``.mat`` file whose variables are the columns: what
+    :func:`~benchmark.core.tables.read_table` does for a path ending in ``.mat``, for what
+    engineers save from MATLAB (``save('startup.mat', 't', 'v_r', ...)``); the arguments are
+    :func:`~benchmark.core.tables.read_table`'s.
 
     Each variable is a numeric vector (row or column, any real numeric type) named like the
     CSV column, all of the same length; one of the column sets in ``alternatives`` must be

@@ -13,8 +13,9 @@ tab-separated table decimals may be written with a comma (``1,5``) as long as no
 the table uses a point, so that the reading is unambiguous. Blank lines at the end are
 ignored; a blank line between data rows is an error (rows would shift).
 
-MATLAB ``.mat`` files (versions 4 to 7) are read by :func:`benchmark.core.matfiles.read_mat_table`, with the same
-return and the same kind of errors: the variable stands for the column, the 1-based index in
+MATLAB ``.mat`` files (versions 4 to 7; a path ending in ``.mat``) are read by :func:`read_table`
+too (:func:`benchmark.core.matfiles.read_mat_columns`), with the same return and the same kind of
+errors: the variable stands for the column, the 1-based index in
 the vector for the row.
 """
 
@@ -197,9 +198,14 @@ def read_table(
     Every returned column is finite float64. Returns the table (only the matched and optional
     columns) and the matched column set. ``max_bytes`` overrides the size limit
     (:func:`max_table_bytes`); ``warn_unused`` warns (:class:`DataWarning`) about columns that
-    are neither matched nor optional.
+    are neither matched nor optional. A path ending in ``.mat`` is read as a MATLAB file whose
+    variables are the columns (:func:`benchmark.core.matfiles.read_mat_columns`).
     """
     path = Path(path)
+    if path.suffix.lower() == ".mat":
+        from benchmark.core.matfiles import read_mat_columns
+
+        return read_mat_columns(path, alternatives, optional, max_bytes, warn_unused)
     text = read_text(path, max_bytes=max_bytes, what="table")
     if not text.strip():
         raise DataError(path, "file is empty")

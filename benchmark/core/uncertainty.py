@@ -245,14 +245,14 @@ class NoiseEstimate:
     method: str
 
 
-def _phi(e: np.ndarray) -> float:
+def ar1_coefficient(e: np.ndarray) -> float:
     """AR(1) coefficient of a mean-removed residual, with Kendall's bias correction
     ``+(1 + 3 phi) / N``, clipped to +-0.97."""
     p = _ar1(e)
     return float(np.clip(p + (1 + 3 * p) / len(e), -RHO_MAX, RHO_MAX))
 
 
-def _ar1_gain(phi: float, omega) -> np.ndarray:
+def ar1_gain(phi: float, omega) -> np.ndarray:
     """AR(1) spectrum relative to white noise of the same variance, at ``omega`` rad/sample."""
     return (1 - phi**2) / (1 - 2 * phi * np.cos(omega) + phi**2)
 
@@ -279,7 +279,7 @@ def noise_from_quiet(x, *, detrend: bool = False) -> NoiseEstimate:
     cols = [np.ones(len(x))] + ([np.linspace(-1, 1, len(x))] if detrend else [])
     A = np.column_stack(cols)
     e = x - A @ np.linalg.lstsq(A, x, rcond=None)[0]
-    phi = _phi(e)
+    phi = ar1_coefficient(e)
     p_eff = min(len(cols) * (1 + phi) / (1 - phi), len(x) / 2)
     return _estimate(e, p_eff, phi, "quiet segment" + (" (detrended)" if detrend else ""))
 
@@ -299,7 +299,7 @@ def _harmonic_design(n: int, fs: float, f: float, n_harmonics: int, trend: bool)
     return np.column_stack(cols), np.asarray(omegas)
 
 
-def _solve(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+def least_squares_solve(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Least squares by normal equations summed in plain numpy (no multi-threaded BLAS: these
     designs are small and well conditioned); falls back to ``lstsq`` when ill-conditioned."""
     G = np.einsum("ij,ik->jk", A, A)
@@ -310,7 +310,7 @@ def _solve(A: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def _harmonic_residual(x, fs, f, n_harmonics, trend):
     A, om = _harmonic_design(len(x), fs, f, n_harmonics, trend)
-    return x - A @ _solve(A, x), om
+    return x - A @ least_squares_solve(A, x), om
 
 
 def refine_frequency(x, fs: float, f0: float, n_harmonics: int = 10, f0_range: float = 0.005,
@@ -328,12 +328,12 @@ def refine_frequency(x, fs: float, f0: float, n_harmonics: int = 10, f0_range: f
                                   for g in grid]))])
     for _ in range(3):
         A, om = _harmonic_design(n, fs, f, n_harmonics, trend)
-        c = _solve(A, x)
+        c = least_squares_solve(A, x)
         m = 1 + trend
         h = (np.arange(len(om) - m) // 2 + 1)[::2]
         a, b = c[m::2], c[m + 1::2]
         jf = 2 * np.pi * t * (A[:, m + 1::2] @ (-a * h) + A[:, m::2] @ (b * h))
-        df = float(_solve(np.column_stack([A, jf]), x)[-1])
+        df = float(least_squares_solve(np.column_stack([A, jf]), x)[-1])
         f += float(np.clip(df, -step, step))
         if abs(df) < 1e-9 * f:
             break
@@ -371,8 +371,8 @@ def noise_from_periodic(x, fs: float, f0: float, n_harmonics: int = 10, *, trend
         f = refine_frequency(x, fs, f0, n_harmonics, f0_range)
     n = int(round(math.floor(len(x) * f / fs) * fs / f))
     e, om = _harmonic_residual(x[:min(n, len(x))], fs, f, n_harmonics, trend)
-    phi = _phi(e)
-    p_eff = min(float(np.sum(_ar1_gain(phi, om))) + (1 if refine_f0 else 0), len(e) / 2)
+    phi = ar1_coefficient(e)
+    p_eff = min(float(np.sum(ar1_gain(phi, om))) + (1 if refine_f0 else 0), len(e) / 2)
     return _estimate(e, p_eff, phi, f"periodic fit ({f:.4f} Hz, {(len(om) - 1 - trend) // 2} harmonics)")
 
 
@@ -447,7 +447,7 @@ def misfit_ratio(residual, noise: NoiseEstimate, *, k: float = 2.0, bias_floor: 
     """
     r = np.asarray(residual, dtype=float).ravel()
     rms = math.sqrt(float(np.mean(r**2)))
-    phi = _phi(r - r.mean()) if len(r) > 2 else 0.0
+    phi = ar1_coefficient(r - r.mean()) if len(r) > 2 else 0.0
     u_res = 1.0 / math.sqrt(2 * len(r) * (1 - phi**2) / (1 + phi**2))
     u = math.hypot(noise.rel_uncertainty, u_res)
     ratio = rms / noise.std if noise.std > 0 else math.inf

@@ -61,7 +61,7 @@ VARIANTS = [
 ]
 
 
-def compose_cfg(model: int, initial: str, tie: bool, seed: int):
+def compose_run_config(model: int, initial: str, tie: bool, seed: int):
     overrides = [
         "problem=admittance",
         "optimizer=lindsay_barton",
@@ -119,11 +119,11 @@ def least_squares_minimum(problem, x0) -> np.ndarray:
 
 def one_run(task):
     model, initial, tie, seed = task
-    cfg = compose_cfg(model, initial, tie, seed)
-    problem = build_problem(cfg)
+    run_config = compose_run_config(model, initial, tie, seed)
+    problem = build_problem(run_config)
     x0 = problem.initial_guess(initial)
-    bp = BudgetedProblem(problem, int(cfg.optimizer.default_budget))
-    res = run_plugin(instantiate(cfg.optimizer.plugin), bp, seed=seed, name=str(cfg.optimizer.name))
+    bp = BudgetedProblem(problem, int(run_config.optimizer.default_budget))
+    res = run_plugin(instantiate(run_config.optimizer.plugin), bp, seed=seed, name=str(run_config.optimizer.name))
     x_true = np.array([problem.truth[n] for n in problem.parameter_names])
     x_ls = least_squares_minimum(problem, x_true)
     est = problem.estimate(res.x)
@@ -153,9 +153,18 @@ def ms(values, fmt="{:.2f}") -> str:
     return f"{fmt.format(v.mean())} ± {fmt.format(v.std(ddof=1) if len(v) > 1 else 0.0)}"
 
 
+def table_row(label: str, cells) -> str:
+    """One Markdown table row: the label, then the cells."""
+    return f"| {label} | " + " | ".join(cells) + " |"
+
+
 def render(rows, seeds: int, wall: float, command: str) -> str:
-    def group(model, initial, tie):
-        return [r for r in rows if (r["model"], r["initial"], r["tie"]) == (model, initial, tie)]
+    def groups():
+        """(model, initial, tie, the rows of that variant) of every variant with rows."""
+        for model, initial, tie in VARIANTS:
+            g = [r for r in rows if (r["model"], r["initial"], r["tie"]) == (model, initial, tie)]
+            if g:
+                yield model, initial, tie, g
 
     out = [
         "# Lindsay-Barton Table I on synthetic data (admittance problem)",
@@ -184,10 +193,7 @@ def render(rows, seeds: int, wall: float, command: str) -> str:
         "| evaluations | L&B initial | L&B after 5 searches |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for model, initial, tie in VARIANTS:
-        g = group(model, initial, tie)
-        if not g:
-            continue
+    for model, initial, tie, g in groups():
         pi, pf = PAPER_TABLE1.get((model, initial), (None, None)) if not tie else (None, None)
         name = f"{model}-parameter" + (", X1 = X2 tied" if tie else "")
         out.append(
@@ -212,10 +218,7 @@ def render(rows, seeds: int, wall: float, command: str) -> str:
         "what 5 searches leave undone.",
         "",
     ]
-    for model, initial, tie in VARIANTS:
-        g = group(model, initial, tie)
-        if not g:
-            continue
+    for model, initial, tie, g in groups():
         order = ORDER8 if model == 8 else ORDER6
         name = f"{model}-parameter, initial model {initial}" + (", X1 = X2 tied" if tie else "")
         truth = g[0]["truth"]
@@ -226,39 +229,20 @@ def render(rows, seeds: int, wall: float, command: str) -> str:
             "| | " + " | ".join(LABEL.get(n, n) for n in order) + " |",
             "|---|" + "---|" * len(order),
         ]
-        out.append("| truth (model F) | " + " | ".join(f"{truth[n]:.4f}" for n in order) + " |")
         vals = {n: np.array([r["estimate"][n] for r in g]) for n in order}
-        out.append(
-            "| estimate | "
-            + " | ".join(f"{vals[n].mean():.4f} ± {vals[n].std(ddof=1):.4f}" for n in order)
-            + " |"
-        )
-        out.append(
-            "| error of the mean | "
-            + " | ".join(f"{100 * (vals[n].mean() / truth[n] - 1):+.1f} %" for n in order)
-            + " |"
-        )
-        out.append(
-            "| spread (sd/truth) | "
-            + " | ".join(f"{100 * vals[n].std(ddof=1) / truth[n]:.1f} %" for n in order)
-            + " |"
-        )
         ls = {n: np.array([r["estimate_ls"][n] for r in g]) for n in order}
-        out.append(
-            "| least-squares minimum | "
-            + " | ".join(f"{ls[n].mean():.4f} ± {ls[n].std(ddof=1):.4f}" for n in order)
-            + " |"
-        )
-        out.append(
-            "| its error of the mean, spread | "
-            + " | ".join(
-                f"{100 * (ls[n].mean() / truth[n] - 1):+.1f} %, {100 * ls[n].std(ddof=1) / truth[n]:.1f} %"
-                for n in order
-            )
-            + " |"
-        )
+        out += [
+            table_row("truth (model F)", (f"{truth[n]:.4f}" for n in order)),
+            table_row("estimate", (f"{vals[n].mean():.4f} ± {vals[n].std(ddof=1):.4f}" for n in order)),
+            table_row("error of the mean", (f"{100 * (vals[n].mean() / truth[n] - 1):+.1f} %" for n in order)),
+            table_row("spread (sd/truth)", (f"{100 * vals[n].std(ddof=1) / truth[n]:.1f} %" for n in order)),
+            table_row("least-squares minimum", (f"{ls[n].mean():.4f} ± {ls[n].std(ddof=1):.4f}" for n in order)),
+            table_row("its error of the mean, spread",
+                      (f"{100 * (ls[n].mean() / truth[n] - 1):+.1f} %, {100 * ls[n].std(ddof=1) / truth[n]:.1f} %"
+                       for n in order)),
+        ]
         if paper is not None:
-            out.append("| L&B Table II | " + " | ".join(f"{paper[n]:.4f}" for n in order) + " |")
+            out.append(table_row("L&B Table II", (f"{paper[n]:.4f}" for n in order)))
         r1s = np.array([r["estimate"].get("R1sigma", np.nan) for r in g])
         out += [
             "",

@@ -64,14 +64,15 @@ NAMES5 = ("Rs", "Ls", "Le", "Rr", "J")
 SUBDIR = "${hydra:runtime.choices.optimizer}_polish${polish}_noise${noise.seed}"
 
 
-def compose_cfg(overrides):
+def compose_run_config(overrides):
     with initialize_config_dir(config_dir=CONF, version_base="1.3"):
         return compose("config", overrides=list(overrides))
 
 
-def noise_levels(cfg) -> tuple[float, float]:
-    """(current sigma in A, speed sigma in rad/s) of the noise preset, quantisation included."""
-    n = cfg.noise
+def noise_levels(noise) -> tuple[float, float]:
+    """(current sigma in A, speed sigma in rad/s) of a noise preset (the ``noise`` section of a run
+    configuration), quantisation included."""
+    n = noise
     sc = float(n.current_std)
     sw = math.sqrt(float(n.speed_std) ** 2 + float(n.speed_quantum) ** 2 / 12.0)
     return sc, sw
@@ -139,24 +140,24 @@ def bounds(theta: np.ndarray, F7: np.ndarray, F_stop: np.ndarray) -> dict[str, n
 
 def compute_bounds(extra: list[str]) -> dict:
     """Everything the bounds need, from the noise-free data of the ``noisy`` preset's motor."""
-    cfg_noisy = compose_cfg(["noise=noisy", *extra])
-    sc, sw = noise_levels(cfg_noisy)
+    noisy_config = compose_run_config(["noise=noisy", *extra])
+    sc, sw = noise_levels(noisy_config.noise)
     # 7-parameter problem (no stop record: fv, fc searched) on noise-free data: only its
     # voltages and simulate() are used
-    cfg7 = compose_cfg(["noise=none", "motor.record_stop=false", *ml_overrides(sc, sw), *extra])
-    problem7 = build_problem(cfg7)
+    config7 = compose_run_config(["noise=none", "motor.record_stop=false", *ml_overrides(sc, sw), *extra])
+    problem7 = build_problem(config7)
     if tuple(problem7.parameter_names) != NAMES7:
         raise RuntimeError(f"expected the 7-parameter problem, got {problem7.parameter_names}")
-    theta = np.array([float(cfg7.motor.parameters[n]) for n in NAMES7])
+    theta = np.array([float(config7.motor.parameters[n]) for n in NAMES7])
     F7 = startup_fisher(problem7, theta, sc, sw)
     F7_check = startup_fisher(problem7, theta, sc, sw, rel_step=1e-4)
     # free stop of the noise-free data: where the free motion starts, and its start speed
     from synthetic.timedomain import make_dataset
 
-    cfg0 = compose_cfg(["noise=none", *extra])
-    ds, _ = make_dataset(cfg0)
+    config0 = compose_run_config(["noise=none", *extra])
+    ds, _ = make_dataset(config0)
     stop = ds.stops[0]
-    mech = fit_free_stop(stop.t, stop.speed, case=int(cfg0.problem.get("friction_case", 2)))
+    mech = fit_free_stop(stop.t, stop.speed, case=int(config0.problem.get("friction_case", 2)))
     t_fm = stop.t[stop.t >= mech.t_free] - mech.t_free
     Rs, Ls, Le, Rr, J, fv, fc = theta
     tau, b = J / fv, fc / J
@@ -176,7 +177,7 @@ def compute_bounds(extra: list[str]) -> dict:
         "stop_samples": int(np.sum((mech.w0 + tau * b) * np.exp(-t_fm / tau) - tau * b > 0)),
         "stop_sample_time": float(np.median(np.diff(stop.t))),
         "startup_samples": int(sum(len(r.t) for r in ds.startups)),
-        "noise": {k: float(cfg_noisy.noise[k]) for k in ("current_std", "speed_std", "speed_quantum")},
+        "noise": {k: float(noisy_config.noise[k]) for k in ("current_std", "speed_std", "speed_quantum")},
     }
 
 
@@ -217,10 +218,10 @@ def collect(rundir: Path, seeds: int) -> dict[str, list[dict]]:
     out: dict[str, list[dict]] = {}
     for f in sorted(rundir.glob("*/result.json")):
         rec = json.loads(f.read_text())
-        cfg = rec.get("config") or {}
-        if int(cfg.get("noise", {}).get("seed", -1)) >= seeds:
+        run_config = rec.get("config") or {}
+        if int(run_config.get("noise", {}).get("seed", -1)) >= seeds:
             continue
-        label = rec["optimizer"] + ("+polish" if cfg.get("polish") else "")
+        label = rec["optimizer"] + ("+polish" if run_config.get("polish") else "")
         out.setdefault(label, []).append(rec)
     return out
 
@@ -229,7 +230,7 @@ def noise_free_bias(sc: float, sw: float, extra: list[str], rundir: Path) -> dic
     """Relative error of least squares (then polish) on the noise-free record with the same
     ML cost: the bias floor of model discretisation (the plant integrates 4 RK4 steps per
     sample, the identification model 1) and of the optimiser's stop."""
-    cfg = compose_cfg(
+    run_config = compose_run_config(
         [
             "noise=none",
             "optimizer=least_squares",
@@ -240,7 +241,7 @@ def noise_free_bias(sc: float, sw: float, extra: list[str], rundir: Path) -> dic
         ]
     )
     # two levels down, so that collect() (rundir/*/result.json) does not take it for a noisy run
-    rec = run(cfg, rundir / "noise_free" / "least_squares_polish").record
+    rec = run(run_config, rundir / "noise_free" / "least_squares_polish").record
     return {k: float(v) for k, v in rec["rel_error"].items()}
 
 

@@ -158,8 +158,8 @@ def main(argv: list[str]) -> None:
     for k, effect in enumerate(("none", "double_cage", "main_saturation", "leakage_saturation")):
         folder = make_set(effect, work / "sets" / effect, seed=100 + k)
         with initialize_config_dir(config_dir=conf, version_base="1.3"):
-            cfg = compose("diagnose", overrides=[f"data.path={folder}", "figures=false"])
-        doc = run_diagnosis(cfg, work / "diagnoses" / effect)
+            diagnosis_config = compose("diagnose", overrides=[f"data.path={folder}", "figures=false"])
+        doc = run_diagnosis(diagnosis_config, work / "diagnoses" / effect)
         top = doc["ranking"][0]
         rows.append((effect, doc["verdict"], top["effect"], top["heldout_reduction"],
                      doc["gap_before"]["heldout_rms_over_noise"], doc["gap_after"]["heldout_rms_over_noise"]))

@@ -71,21 +71,21 @@ def story_stop(figdir: Path) -> list[str]:
 def story_double_cage(figdir: Path, outdir: Path) -> list[str]:
     from benchmark.core.harness import run_diagnosis
 
-    cfg = _compose("diagnose", ["effects=[double_cage]", "noise=noisy", "diagnosis.base_case=2",
+    diagnosis_config = _compose("diagnose", ["effects=[double_cage]", "noise=noisy", "diagnosis.base_case=2",
                                 "candidates=[double_cage,leakage_saturation,main_saturation]", "figures=false"])
     doc_models = {}
 
     def keep(name):
         doc_models.setdefault("order", []).append(name)
 
-    doc = run_diagnosis(cfg, outdir, progress=keep)
+    doc = run_diagnosis(diagnosis_config, outdir, progress=keep)
     # rebuild the two fits for the figure from the saved estimates
     from benchmark.core.effects import load_effects
     from benchmark.core.harness import load_dataset
     from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
     from benchmark.problems.timedomain.diagnosis.pipeline import base_context
 
-    ds, _ = load_dataset(cfg)
+    ds, _ = load_dataset(diagnosis_config)
     data = DiagnosisData.from_dataset(ds)
     ctx = base_context(data, doc["base"]["identification"], ds.dc_link_voltage)
     base = JointModel(data, 2, None, ctx, doc["base"]["identification"])

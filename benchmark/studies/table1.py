@@ -40,11 +40,11 @@ def main(argv: list[str]) -> str:
     for seed in range(n_seeds):
         for polish in ([False, True] if opts["polish_also"] == "true" else [False]):
             with initialize_config_dir(config_dir=CONF, version_base="1.3"):
-                cfg = compose("config", overrides=["+experiment=table1", f"seed={seed}", f"polish={polish}",
+                run_config = compose("config", overrides=["+experiment=table1", f"seed={seed}", f"polish={polish}",
                                                    "figures=false",
                                                    *overrides])
             outdir = Path(opts["rundir"]) / f"seed{seed}{'_polish' if polish else ''}"
-            rec = run(cfg, outdir).record
+            rec = run(run_config, outdir).record
             rows.append(rec)
             errs = " ".join(f"{k} {100 * rec['rel_error'][k]:+.2f}%" for k in NAMES)
             print(f"seed {seed} polish={polish}: cost {rec['cost']:.5g}  {errs}", flush=True)

@@ -55,3 +55,36 @@ def test_draw_counts_give_effect_free_and_two_effect_shares():
     cfg = OmegaConf.create({"n": 30, "free_share": 0.34, "two_share": 0.3})
     counts = [n_effects_of(i, cfg) for i in range(30)]
     assert counts.count(0) == 10 and counts.count(2) == 6 and counts.count(1) == 14
+
+
+def test_settings_are_made_once_from_the_config_and_the_draws_use_each_effects_own_forms():
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    from benchmark.analysis.blind import BlindSettings, diagnosis_config, draw_sets, generator_config
+    from benchmark.core.effects import load_effects
+
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        cfg = compose("blind", overrides=["n=12", "seed=4", "exclude_effects=[iron_loss]"])
+    s = BlindSettings.from_run(cfg)
+    assert (s.n, s.seed, s.free_share, s.exclude_effects, s.in_base) == (12, 4, 0.34, ("iron_loss",),
+                                                                          ("coulomb_friction",))
+    draws = draw_sets(s, exclude=s.in_base)
+    assert draws == draw_sets(BlindSettings.from_run(cfg), exclude=s.in_base)  # same seed, same draws
+    assert [len(d["effects"]) for d in draws] == [n_effects_of(i, s) for i in range(12)]
+    effects = load_effects("timedomain")
+    for d in draws:
+        assert not {"iron_loss", "coulomb_friction"} & set(d["effects"])
+        for e, form in d["form"].items():  # drawn from the effect's own FORM_DRAWS
+            spec = effects[e].FORM_DRAWS
+            alternatives = spec if isinstance(spec, list) else [spec or {}]
+            assert any(set(form) == set(a) for a in alternatives), e
+    d = next(d for d in draws if d["effects"])
+    gen = generator_config(s, d)
+    assert gen.effects == d["effects"] and gen.noise.seed == d["noise_seed"] and gen.data.path is None
+    assert math.isclose(gen.motor.parameters.Rs, cfg.motor.parameters.Rs * d["motor_scale"]["Rs"])
+    diag = diagnosis_config(s, Path("/some/folder"))
+    assert diag.data.path == "/some/folder" and list(diag.effects) == [] and diag.figures is False
+    assert s.run["motor"]["parameters"]["Rs"] == cfg.motor.parameters.Rs  # the settings' copy is untouched

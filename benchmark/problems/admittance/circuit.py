@@ -29,7 +29,7 @@ add a flat direction to every optimiser's landscape; it is left out deliberately
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
@@ -118,17 +118,7 @@ class CircuitParameters:
 
         Only the copper resistances R1 and R2 follow temperature; the core-loss terms do not."""
         k = copper_factor(theta, theta_ref)
-        return CircuitParameters(
-            R1=self.R1 * k,
-            X1=self.X1,
-            R2=self.R2 * k,
-            X2=self.X2,
-            R0=self.R0,
-            X0=self.X0,
-            R1sigma=self.R1sigma,
-            R2sigma=self.R2sigma,
-            X3=self.X3,
-        )
+        return replace(self, R1=self.R1 * k, R2=self.R2 * k)
 
 
 # ----------------------------------------------------------------------------- slip and speed

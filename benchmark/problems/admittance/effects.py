@@ -228,14 +228,29 @@ def _with_lb_terms(rotor, circuit):
     """Keep an 8-parameter plant's R2sigma, X3 when a rotor form replaces the single cage."""
     if circuit.R2sigma == 0.0 and circuit.X3 == 0.0:
         return rotor
+    return _series_rotor(rotor, lambda s: circuit.R2sigma * np.sign(s) - 1j * circuit.X3 * np.abs(s))
 
-    def wrapped(s, R2, X2):
+
+def _series_rotor(inner, z_of_s):
+    """The rotor admittance ``inner(s, R2, X2)`` with a slip-dependent series impedance
+    ``z_of_s(s)`` (ohm) added: ``Y / (1 + z Y)``."""
+
+    def rotor(s, R2, X2):
         s = np.asarray(s, float)
-        Y = rotor(s, R2, X2)
-        Z_extra = circuit.R2sigma * np.sign(s) - 1j * circuit.X3 * np.abs(s)
-        return Y / (1.0 + Z_extra * Y)
+        Y = inner(s, R2, X2)
+        return Y / (1.0 + z_of_s(s) * Y)
 
-    return wrapped
+    return rotor
+
+
+def _current_leakage(c: float, I_ref: float, n):
+    """Leakage factors ``(k1, k2)`` on X1, X2 that fall with the currents:
+    ``1 / (1 + c (|I| / I_ref)^n)``."""
+
+    def leak(I1, I2):
+        return 1.0 / (1.0 + c * (I1 / I_ref) ** n), 1.0 / (1.0 + c * (I2 / I_ref) ** n)
+
+    return leak
 
 
 class MainSaturation(AdmittanceEffect):
@@ -415,22 +430,10 @@ class LeakageSaturation(AdmittanceEffect):
             X3 = size * circuit.X2
             if circuit.rotor is None:
                 return circuit.with_(X3=circuit.X3 + X3)
-            inner = circuit.rotor
-
-            def rotor(s, R2, X2):
-                Y = inner(s, R2, X2)
-                return Y / (1.0 - 1j * X3 * np.abs(s) * Y)
-
-            return circuit.with_(rotor=rotor)
+            return circuit.with_(rotor=_series_rotor(circuit.rotor, lambda s: -1j * X3 * np.abs(s)))
         if kind == "current":
             n = float(form.get("exponent", 2.0))
-            c = size / (1.0 - size)
-            I_ref = ctx.I_stall
-
-            def leak(I1, I2):
-                return 1.0 / (1.0 + c * (I1 / I_ref) ** n), 1.0 / (1.0 + c * (I2 / I_ref) ** n)
-
-            return circuit.with_(leak_of_i=leak)
+            return circuit.with_(leak_of_i=_current_leakage(size / (1.0 - size), ctx.I_stall, n))
         raise ValueError(f"effect_form.leakage_saturation.kind: slip or current, got {kind!r}")
 
     def extra_bounds(self, ctx):
@@ -444,13 +447,7 @@ class LeakageSaturation(AdmittanceEffect):
         f = float(extras[1])
         if f == 0.0:
             return out
-        c = f / (1.0 - f)
-        I_ref = ctx.I_stall
-
-        def leak(I1, I2):
-            return 1.0 / (1.0 + c * (I1 / I_ref) ** 2), 1.0 / (1.0 + c * (I2 / I_ref) ** 2)
-
-        return out.with_(leak_of_i=leak)
+        return out.with_(leak_of_i=_current_leakage(f / (1.0 - f), ctx.I_stall, 2))
 
 
 class LeakageCoreLoss(AdmittanceEffect):
@@ -481,14 +478,8 @@ class LeakageCoreLoss(AdmittanceEffect):
         if smooth <= 0 and circuit.rotor is None:
             return out.with_(R2sigma=circuit.R2sigma + R2s)
         inner = circuit.rotor or (lambda s, R2, X2: rotor_admittance(s, R2, X2, circuit.R2sigma, circuit.X3))
-
-        def rotor(s, R2, X2):
-            s = np.asarray(s, float)
-            Y = inner(s, R2, X2)
-            sg = np.tanh(s / smooth) if smooth > 0 else np.sign(s)
-            return Y / (1.0 + R2s * sg * Y)
-
-        return out.with_(rotor=rotor)
+        sign = (lambda s: np.tanh(s / smooth)) if smooth > 0 else np.sign
+        return out.with_(rotor=_series_rotor(inner, lambda s: R2s * sign(s)))
 
     def extra_bounds(self, ctx):
         return np.array([-0.2]), np.array([0.6])

@@ -248,8 +248,8 @@ def section_scaling(problem, X, quick: bool) -> dict:
 
 def section_admittance(quick: bool) -> dict:
     try:
-        cfg = compose(["problem=admittance", f"motor.test.speed_step_rpm={4200.0 / 99.0!r}"])
-        problem = build_problem(cfg)
+        run_config = compose(["problem=admittance", f"motor.test.speed_step_rpm={4200.0 / 99.0!r}"])
+        problem = build_problem(run_config)
         n_points = len(problem.data.slip)
         X = population(problem, 1000)
         problem.evaluate(X[:2])

@@ -62,9 +62,9 @@ def identify_probe(conf_dir: str, budget: str, overrides: list[str]) -> dict:
 
     TimeDomainProblem.evaluate = timed_evaluate
     with initialize_config_dir(config_dir=conf_dir, version_base="1.3"):
-        cfg = compose("config", overrides=["+experiment=table1", "seed=0", "budget=" + budget, *overrides])
+        run_config = compose("config", overrides=["+experiment=table1", "seed=0", "budget=" + budget, *overrides])
     t_composed = time.perf_counter() - T0
-    rec = run(cfg, Path(tempfile.mkdtemp(prefix="imbench-perf-"))).record
+    rec = run(run_config, Path(tempfile.mkdtemp(prefix="imbench-perf-"))).record
     out = {k: rec[k] for k in ("evaluations", "cost", "wall_time_s", "wall_time_optimizer_s", "setup_time_s",
                                "rel_error", "status")}
     out.update(imports_s=t_imports, composed_s=t_composed, evaluate_s=sim["total"], first_evaluate_s=sim["first"],
@@ -83,9 +83,10 @@ def diagnose_probe(conf_dir: str, overrides: list[str]) -> dict:
     from benchmark.core.harness import run_diagnosis
 
     with initialize_config_dir(config_dir=conf_dir, version_base="1.3"):
-        cfg = compose("diagnose", overrides=["effects=[double_cage]", "noise=noisy", "figures=false", *overrides])
+        diagnosis_config = compose("diagnose", overrides=["effects=[double_cage]", "noise=noisy", "figures=false",
+                                                          *overrides])
     t0 = time.perf_counter()
-    doc = run_diagnosis(cfg, Path(tempfile.mkdtemp(prefix="imbench-perf-diag-")))
+    doc = run_diagnosis(diagnosis_config, Path(tempfile.mkdtemp(prefix="imbench-perf-diag-")))
     return {"wall_s": time.perf_counter() - t0, "verdict": doc.get("verdict"), "status": doc.get("status"),
             "candidates": len(doc.get("ranking") or doc.get("candidates") or []),
             "cpu_s": time.process_time(), "inside_s": time.perf_counter() - T0}

@@ -29,6 +29,18 @@ def _motor_terms(theta: np.ndarray, p: float):
     }
 
 
+def _electrical(m, i_a, i_b, psi_a, psi_b, w, va, vb) -> tuple:
+    """d/dt of (i_a, i_b, psi_a, psi_b) for ``m = (a11, a13, c1, c2, a31, a33)``; scalars or
+    arrays over the candidates alike."""
+    a11, a13, c1, c2, a31, a33 = m
+    return (
+        -a11 * i_a + a13 * psi_a + c2 * w * psi_b + c1 * va,
+        -a11 * i_b + a13 * psi_b - c2 * w * psi_a + c1 * vb,
+        a31 * i_a - a33 * psi_a - w * psi_b,
+        a31 * i_b - a33 * psi_b + w * psi_a,
+    )
+
+
 def solve_ivp_outputs(
     theta_row: np.ndarray,
     p: float,
@@ -43,7 +55,7 @@ def solve_ivp_outputs(
     from scipy.integrate import solve_ivp
 
     c = {k: float(v[0]) for k, v in _motor_terms(theta_row[None], p).items()}
-    a11, a13, c1, c2, a31, a33 = c["a11"], c["a13"], c["c1"], c["c2"], c["a31"], c["a33"]
+    m = tuple(c[k] for k in ("a11", "a13", "c1", "c2", "a31", "a33"))
     kt, inv_tau, b_m, fc = c["kt"], c["inv_tau"], c["b_m"], c["fc"]
     volt = [0.0, 0.0]
 
@@ -59,13 +71,7 @@ def solve_ivp_outputs(
             dw = 0.0
         else:
             dw = b_m * (t_m - math.copysign(fc, t_m))
-        return [
-            -a11 * i_a + a13 * psi_a + c2 * w * psi_b + c1 * va,
-            -a11 * i_b + a13 * psi_b - c2 * w * psi_a + c1 * vb,
-            a31 * i_a - a33 * psi_a - w * psi_b,
-            a31 * i_b - a33 * psi_b + w * psi_a,
-            dw,
-        ]
+        return [*_electrical(m, i_a, i_b, psi_a, psi_b, w, va, vb), dw]
 
     n = len(t)
     change = np.flatnonzero((np.diff(v_a) != 0) | (np.diff(v_b) != 0)) + 1
@@ -107,7 +113,7 @@ def numpy_rk4_cost(
     """The fixed-step RK4 cost (zero-order hold) vectorised over the population with NumPy:
     every operation is an array operation over the candidates; loop over the samples."""
     c = _motor_terms(theta, p)
-    a11, a13, c1, c2, a31, a33 = c["a11"], c["a13"], c["c1"], c["c2"], c["a31"], c["a33"]
+    m = tuple(c[k] for k in ("a11", "a13", "c1", "c2", "a31", "a33"))
     kt, inv_tau, b_m, fc = c["kt"], c["inv_tau"], c["b_m"], c["fc"]
     ka, kb, kw = (float(x) for x in weights)
     n_pop = len(theta)
@@ -119,13 +125,7 @@ def numpy_rk4_cost(
         t_m = kt * (pa * ib - pb * ia)
         s = np.where(d != 0.0, d, np.where(t_m > fc, 1.0, np.where(t_m < -fc, -1.0, 0.0)))
         dw = np.where(s != 0.0, -w * inv_tau + b_m * (t_m - fc * s), 0.0)
-        return (
-            -a11 * ia + a13 * pa + c2 * w * pb + c1 * va,
-            -a11 * ib + a13 * pb - c2 * w * pa + c1 * vb,
-            a31 * ia - a33 * pa - w * pb,
-            a31 * ib - a33 * pb + w * pa,
-            dw,
-        )
+        return (*_electrical(m, ia, ib, pa, pb, w, va, vb), dw)
 
     n = len(v_a)
     with np.errstate(all="ignore"):
@@ -140,27 +140,10 @@ def numpy_rk4_cost(
             va, vb = v_a[k], v_b[k]
             d = np.sign(w)
             k1 = f(ia, ib, pa, pb, w, va, vb, d)
-            k2 = f(
-                ia + 0.5 * h * k1[0],
-                ib + 0.5 * h * k1[1],
-                pa + 0.5 * h * k1[2],
-                pb + 0.5 * h * k1[3],
-                w + 0.5 * h * k1[4],
-                va,
-                vb,
-                d,
-            )
-            k3 = f(
-                ia + 0.5 * h * k2[0],
-                ib + 0.5 * h * k2[1],
-                pa + 0.5 * h * k2[2],
-                pb + 0.5 * h * k2[3],
-                w + 0.5 * h * k2[4],
-                va,
-                vb,
-                d,
-            )
-            k4 = f(ia + h * k3[0], ib + h * k3[1], pa + h * k3[2], pb + h * k3[3], w + h * k3[4], va, vb, d)
+            x = (ia, ib, pa, pb, w)
+            k2 = f(*(xi + 0.5 * h * ki for xi, ki in zip(x, k1, strict=True)), va, vb, d)
+            k3 = f(*(xi + 0.5 * h * ki for xi, ki in zip(x, k2, strict=True)), va, vb, d)
+            k4 = f(*(xi + h * ki for xi, ki in zip(x, k3, strict=True)), va, vb, d)
             h6 = h / 6.0
             ia_n = ia + h6 * (k1[0] + 2.0 * (k2[0] + k3[0]) + k4[0])
             ib_n = ib + h6 * (k1[1] + 2.0 * (k2[1] + k3[1]) + k4[1])

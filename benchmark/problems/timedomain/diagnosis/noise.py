@@ -24,9 +24,9 @@ import numpy as np
 
 from benchmark.core.uncertainty import (
     NoiseEstimate,
-    _ar1_gain,
-    _phi,
-    _solve,
+    ar1_coefficient,
+    ar1_gain,
+    least_squares_solve,
     noise_from_quiet,
     noise_from_smooth,
     refine_frequency,
@@ -91,7 +91,7 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
     for h in range(1, h_max + 1):
         plain += [np.cos(h * w), np.sin(h * w)]
     A = np.column_stack(plain)
-    c = _solve(A, x)
+    c = least_squares_solve(A, x)
     amp = np.hypot(c[1::2], c[2::2])
     keep = np.flatnonzero(amp > rel_line * amp.max()) + 1
     cols, om = [tau**k for k in range(order + 1)], [0.0] * (order + 1)
@@ -100,9 +100,9 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
             cols += [tau**k * np.cos(h * w), tau**k * np.sin(h * w)]
             om += [2 * np.pi * h * f0 / fs] * 2
     A = np.column_stack(cols)
-    e = x - A @ _solve(A, x)
-    phi = _phi(e)
-    p_eff = min(float(np.sum(_ar1_gain(phi, np.asarray(om)))), n / 2)
+    e = x - A @ least_squares_solve(A, x)
+    phi = ar1_coefficient(e)
+    p_eff = min(float(np.sum(ar1_gain(phi, np.asarray(om)))), n / 2)
     dof = max(n - p_eff, 1.0)
     n_eff = dof * (1 - phi**2) / (1 + phi**2)
     return NoiseEstimate(math.sqrt(float(e @ e) / dof), 1.0 / math.sqrt(2 * n_eff), n_eff,

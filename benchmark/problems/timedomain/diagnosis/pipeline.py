@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmark.core.effects import Effect, effect_context
-from benchmark.core.uncertainty import _phi, misfit_ratio
+from benchmark.core.uncertainty import ar1_coefficient, misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.noise import combined
@@ -210,7 +210,7 @@ def effective_samples(data: DiagnosisData, r: np.ndarray, mask: np.ndarray | Non
         x = r[s] if mask is None else r[s][mask[s]]
         if len(x) < 3:
             continue
-        phi = _phi(x - x.mean())
+        phi = ar1_coefficient(x - x.mean())
         total += len(x) * (1 - phi) / (1 + phi)
     return max(total, 2.0)
 
