@@ -92,10 +92,10 @@ def identify_record(folder: Path, pipeline: str, outdir: Path) -> dict:
     overrides = PIPELINES[pipeline] + [f"data.path={folder}", "figures=false", "checkpoint=false",
                                        "progress=false"]
     with initialize_config_dir(config_dir=str(conf), version_base=None):
-        cfg = compose("config", overrides=overrides)
+        run_config = compose("config", overrides=overrides)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return run(cfg, outdir).record
+        return run(run_config, outdir).record
 
 
 def summarise(record: dict) -> dict:
