@@ -156,9 +156,7 @@ def make_dataset(spec: dict) -> Dataset:
     traj = simulate(plant, drive, packed=pk)
     out = traj.out
     if scenario.kind == "dol":
-        i_ab = out[:, [COL["i_a"], COL["i_b"]]]
-        di = np.gradient(i_ab, h, axis=0)
-        v_step = out[:-1, [COL["v_a"], COL["v_b"]]] - plant.source_L * di[:-1]
+        v_step = terminal_voltage(out, drive, plant.source_L, h)
     else:
         v_step = drive.v_ideal
     d_cur = int(round(build.skew["current"] * M))
@@ -191,6 +189,32 @@ def make_dataset(spec: dict) -> Dataset:
         meta["nameplate"] = _plain(motor.nameplate())
     truth = _truth(spec, motor, plant, realised, noise, scenario, M, traj)
     return Dataset(meta, rec, stop, truth, traj, plant)
+
+
+def terminal_voltage(out: np.ndarray, drive, source_L: float, h: float) -> np.ndarray:
+    """The motor-terminal alpha-beta voltage of a grid start at every internal step (n, 2):
+    the voltage behind the source impedance's inductance (``out``'s ``v_a, v_b``: EMF minus the
+    resistive and arc drops, the open pole's drop included) minus ``L_g di/dt``.
+
+    At a step where the contactor changes (a pole closes, an arc starts or ends) the value is
+    the one just after the change, extrapolated from the next two steps, which is what a
+    voltmeter on the motor's terminals reads: the plant's first row of a new configuration is
+    computed before the currents have moved, so an open pole's terminal would show the grid's
+    EMF (its large resistance carries no current yet) instead of the motor's own back-EMF that a
+    floating terminal sits at, and ``di/dt`` would be a central difference across the kink."""
+    i_ab = out[:, [COL["i_a"], COL["i_b"]]]
+    di = np.gradient(i_ab, h, axis=0)
+    v = out[:-1, [COL["v_a"], COL["v_b"]]] - source_L * di[:-1]
+    n = len(v)
+    change = np.zeros(n, bool)
+    change[1:] = (np.any(drive.closed[1:] != drive.closed[:-1], axis=1)
+                  | np.any(drive.arc[1:] != drive.arc[:-1], axis=1) | (drive.mode[1:] != drive.mode[:-1]))
+    for j in np.flatnonzero(change):
+        if j + 2 < n and not change[j + 1] and not change[j + 2]:
+            v[j] = 2.0 * v[j + 1] - v[j + 2]
+        elif j + 1 < n:
+            v[j] = v[j + 1]
+    return v
 
 
 def _plant_and_drive(build: Build, Ts: float, K: int, oversample: int):

@@ -14,7 +14,10 @@ contactor pole's state per step.
     can flow (stator open); with two closed the third pole is a large resistance; each pole
     bounces after closing, carrying the current through an arc (a voltage ``U_arc`` opposing
     it) for its bounce time. Recorded: the terminal phase voltages (motor side of the
-    contactor and source impedance), ``input_hold: linear``.
+    contactor and source impedance), ``input_hold: linear``; at the internal step where the
+    contactor changes, the value just after the change (a floating open terminal sits at the
+    motor's back-EMF, not at the grid's EMF that the open pole's resistance shows before its
+    current has moved: :func:`synthetic.independent.dataset.terminal_voltage`).
 ``six_step``
     Switch states ``100, 110, 010, 011, 001, 101``, each for ``Nc`` samples, ``cycles`` times;
     the supply frequency is ``1/(6 Nc Ts)``. Recorded: switch-state voltages, ``zoh``.
