@@ -74,6 +74,7 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
     base_rows,
     valid_rows,
 )
+from benchmark.problems.timedomain.simulation import substep_voltages
 
 N_STATES = 10
 SQRT3_2 = math.sqrt(3.0) / 2.0
@@ -378,28 +379,23 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0):
         out[2, k] = x[8] if two else x[6] / p
         if k == n - 1:
             break
-        va0, vb0 = v_a[k], v_b[k]
-        dva = v_a[k + 1] - va0 if linear else 0.0
-        dvb = v_b[k + 1] - vb0 if linear else 0.0
         for j in range(substeps):
-            f0 = j / substeps
-            fm = (j + 0.5) / substeps
-            f1 = (j + 1.0) / substeps
+            f0, va0, vb0, vam, vbm, va1, vb1 = substep_voltages(v_a, v_b, k, linear, j, substeps)
             ts = t0 + (k + f0) * h
             w0 = x[6]
             wl0 = x[8]
             d = _sign(w0)
             dl = _sign(wl0)
-            _derivative(c, x, va0 + f0 * dva, vb0 + f0 * dvb, d, dl, ts, k1)
+            _derivative(c, x, va0, vb0, d, dl, ts, k1)
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k1[s]
-            _derivative(c, xt, va0 + fm * dva, vb0 + fm * dvb, d, dl, ts + 0.5 * hs, k2)
+            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2)
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k2[s]
-            _derivative(c, xt, va0 + fm * dva, vb0 + fm * dvb, d, dl, ts + 0.5 * hs, k3)
+            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3)
             for s in range(N_STATES):
                 xt[s] = x[s] + hs * k3[s]
-            _derivative(c, xt, va0 + f1 * dva, vb0 + f1 * dvb, d, dl, ts + hs, k4)
+            _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4)
             for s in range(N_STATES):
                 x[s] = x[s] + hs / 6.0 * (k1[s] + 2.0 * (k2[s] + k3[s]) + k4[s])
             _stick(c, x, w0, wl0, ts + hs)

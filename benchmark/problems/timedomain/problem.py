@@ -4,7 +4,10 @@ Cost (eqs. 13-15), summed over every start-up record of the data set::
 
     f = sum_j ka e(i_a,j) + kb e(i_b,j) + kw e(w_j),  e(x) = |x_meas - x_sim|^exponent
 
-with ``exponent`` 1 (eq. 15) or 2 (eq. 14); ``w`` is the mechanical speed in rad/s.
+with ``exponent`` 1 (eq. 15) or 2 (eq. 14); ``w`` is the mechanical speed in rad/s. Current
+samples the conditioning masked (``StartupRecord.weight`` False: clipped probes, the switching
+window of a contactor) are left out of the sum, the residuals, the fit quality and the standard
+errors; the model is simulated through them.
 
 Searched parameters: ``Rs, Ls, Le, Rr, J`` when a stop record fixes ``tau_m`` and ``fc/J``
 (then ``fv = J/tau_m`` and ``fc = J*(fc/J)`` follow for each candidate); ``J`` is dropped when
@@ -101,6 +104,10 @@ class TimeDomainProblem(Problem):
              np.ascontiguousarray(r.speed if self.speed_measured else np.zeros_like(r.i_alpha)))
             for r in dataset.startups
         ]
+        # Current samples the conditioning masked (StartupRecord.weight False: clipped probes, the
+        # switching window): they add nothing to the cost and their residuals are 0. None: all count.
+        self._current_used = [None if r.weight is None else np.ascontiguousarray(np.asarray(r.weight, bool))
+                              for r in dataset.startups]
         self._noise = None  # per-channel noise estimates, made on first use (see channel_noise)
         self._prior_scale = None
 
@@ -127,9 +134,9 @@ class TimeDomainProblem(Problem):
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         coef = coefficients(self.full_parameters(X), self.dataset.pole_pairs)
         total = np.zeros(len(coef))
-        for v_a, v_b, i_a, i_b, w in self._records:
+        for (v_a, v_b, i_a, i_b, w), used in zip(self._records, self._current_used, strict=True):
             total += startup_cost_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time, i_a, i_b, w,
-                                        float(self.dataset.pole_pairs), self.weights, self.exponent)
+                                        float(self.dataset.pole_pairs), self.weights, self.exponent, used)
         if self.stator_resistance == "prior":
             p = self.prior_residual(X)
             total = total + (p**2 if self.exponent == 2 else np.abs(p))
@@ -230,11 +237,15 @@ class TimeDomainProblem(Problem):
         every measured, weighted channel at ``x``."""
         sims = self.simulate(np.asarray(x, float)[None, :])
         out = []
-        for j, (sim, rec, noise) in enumerate(zip(sims, self._records, self.channel_noise(), strict=True)):
+        for j, (sim, rec, noise, used) in enumerate(zip(sims, self._records, self.channel_noise(),
+                                                        self._current_used, strict=True)):
             for c, key in enumerate(WEIGHT_KEYS):
                 if self.weights[c] == 0 or noise[c] is None:
                     continue
-                out.append((key if len(self._records) == 1 else f"{key}[{j}]", rec[2 + c] - sim[0, c], noise[c]))
+                r = rec[2 + c] - sim[0, c]
+                if c < 2 and used is not None:  # masked current samples are not part of the fit
+                    r = r[used]
+                out.append((key if len(self._records) == 1 else f"{key}[{j}]", r, noise[c]))
         return out
 
     #: Rs departing from the DC resistance by more than this (relative) is reported.
@@ -264,13 +275,17 @@ class TimeDomainProblem(Problem):
                 for v_a, v_b, *_ in self._records]
 
     def residuals_batch(self, X: np.ndarray) -> np.ndarray:
-        """Weighted residuals ``sqrt(k) (x_meas - x_sim)`` of each candidate: (n, 3*N_total).
-        Their sum of squares is the eq. 14 cost with the same weights."""
+        """Weighted residuals ``sqrt(k) (x_meas - x_sim)`` of each candidate: (n, 3*N_total),
+        0 at the masked current samples. Their sum of squares is the eq. 14 cost with the same
+        weights and mask."""
         parts = []
         sw = np.sqrt(self.weights)[None, :, None]
-        for sim, (_, _, i_a, i_b, w) in zip(self.simulate(X), self._records, strict=True):
+        for sim, (_, _, i_a, i_b, w), used in zip(self.simulate(X), self._records, self._current_used, strict=True):
             meas = np.stack([i_a, i_b, w])[None]
-            parts.append((sw * (meas - sim)).reshape(len(sim), -1))
+            e = sw * (meas - sim)
+            if used is not None:  # masked current samples: residual 0 (no cost, no Jacobian row)
+                e[:, :2, ~used] = 0.0
+            parts.append(e.reshape(len(sim), -1))
         if self.stator_resistance == "prior":
             parts.append(self.prior_residual(X)[:, None])
         r = np.concatenate(parts, axis=1)

@@ -193,44 +193,63 @@ def _load_chunk(W, coef_t, start, nl):
 
 
 @numba.njit(cache=True)
-def _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p, ka, kb, kw, exponent):
-    """Run the eq. 13-15 cost of the ``nl`` lanes of ``W`` over the whole record."""
+def _advance(W, nl, v_a, v_b, k, linear, h):
+    """One RK4 step of the lanes of ``W`` from sample ``k`` to ``k+1`` (shared by the cost and
+    the output kernels); True when every lane has diverged (checked every :data:`_ALIVE_CHECK`
+    steps), so that the chunk may stop."""
+    va0, vb0, vam, vbm, va1, vb1 = _stage_voltages(v_a, v_b, k, linear)
+    _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h)
+    return k % _ALIVE_CHECK == _ALIVE_CHECK - 1 and _all_diverged(W, nl)
+
+
+@numba.njit(cache=True)
+def _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, current_used, inv_p, ka, kb, kw,
+                exponent):
+    """Run the eq. 13-15 cost of the ``nl`` lanes of ``W`` over the whole record.
+
+    ``current_used[k]`` False: the current samples ``k`` are masked (they add nothing; the
+    speed sample still counts); the lanes are simulated through them all the same. Where it is
+    True the sum is the one of the unmasked cost, operation for operation."""
     L = LANES
     n = v_a.shape[0]
     for k in range(n):
         ma = i_a_meas[k]
         mb = i_b_meas[k]
         mw = speed_meas[k]
-        if exponent == 2:
+        if current_used[k]:
+            if exponent == 2:
+                for j in range(nl):
+                    ea = ma - W[_R_IA * L + j]
+                    eb = mb - W[_R_IB * L + j]
+                    ew = mw - W[_R_W * L + j] * inv_p
+                    W[_R_COST * L + j] += ka * ea * ea + kb * eb * eb + kw * ew * ew
+            else:
+                for j in range(nl):
+                    ea = ma - W[_R_IA * L + j]
+                    eb = mb - W[_R_IB * L + j]
+                    ew = mw - W[_R_W * L + j] * inv_p
+                    W[_R_COST * L + j] += ka * abs(ea) + kb * abs(eb) + kw * abs(ew)
+        elif kw != 0.0:
             for j in range(nl):
-                ea = ma - W[_R_IA * L + j]
-                eb = mb - W[_R_IB * L + j]
                 ew = mw - W[_R_W * L + j] * inv_p
-                W[_R_COST * L + j] += ka * ea * ea + kb * eb * eb + kw * ew * ew
-        else:
-            for j in range(nl):
-                ea = ma - W[_R_IA * L + j]
-                eb = mb - W[_R_IB * L + j]
-                ew = mw - W[_R_W * L + j] * inv_p
-                W[_R_COST * L + j] += ka * abs(ea) + kb * abs(eb) + kw * abs(ew)
+                W[_R_COST * L + j] += kw * (ew * ew if exponent == 2 else abs(ew))
         if k == n - 1:
             break
-        va0, vb0, vam, vbm, va1, vb1 = _stage_voltages(v_a, v_b, k, linear)
-        _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h)
-        if k % _ALIVE_CHECK == _ALIVE_CHECK - 1 and _all_diverged(W, nl):
+        if _advance(W, nl, v_a, v_b, k, linear, h):
             break
 
 
 @numba.njit(cache=True, nogil=True)
 def _cost_block(start, stop, W, coef_t, lanes, res, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas,
-                inv_p, ka, kb, kw, exponent):
+                current_used, inv_p, ka, kb, kw, exponent):
     """Costs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``res[start:stop]``,
     ``lanes`` at a time (+inf where diverged), using the work buffer ``W``. Releases the GIL."""
     s = start
     while s < stop:
         nl = min(lanes, stop - s)
         _load_chunk(W, coef_t, s, nl)
-        _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, inv_p, ka, kb, kw, exponent)
+        _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, current_used, inv_p, ka, kb, kw,
+                    exponent)
         for j in range(nl):
             total = W[_R_COST * LANES + j]
             res[s + j] = total if (W[_R_BAD * LANES + j] == 0.0 and abs(total) < np.inf) else np.inf
@@ -253,9 +272,7 @@ def _chunk_outputs(W, nl, rows, start, n_real, out, v_a, v_b, linear, h, inv_p):
                 out[m, 2, k] = W[_R_W * L + j] * inv_p
         if k == n - 1:
             break
-        va0, vb0, vam, vbm, va1, vb1 = _stage_voltages(v_a, v_b, k, linear)
-        _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h)
-        if k % _ALIVE_CHECK == _ALIVE_CHECK - 1 and _all_diverged(W, nl):
+        if _advance(W, nl, v_a, v_b, k, linear, h):
             break
 
 
@@ -326,7 +343,7 @@ def _run_blocks(block_fn, bounds, *args) -> None:
 
 
 def _cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, weights, exponent, lanes,
-                n_blocks):
+                n_blocks, current_weight=None):
     """:func:`startup_cost_batch` with the chunk width (``1 <= lanes <= LANES``) and the number
     of parallel blocks given (the result depends on neither)."""
     if not 1 <= lanes <= LANES:
@@ -335,28 +352,45 @@ def _cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, we
     out = np.full(coef.shape[0], np.inf)
     if coef.shape[0] == 0:
         return out
+    used = current_mask(current_weight, v_a.shape[0])
     rows, coef_t, _, bounds = _plan(coef, n_blocks)
     res = np.empty(coef_t.shape[1])
     _run_blocks(_cost_block, bounds, coef_t, int(lanes), res, v_a, v_b, bool(linear), float(h), i_a_meas,
-                i_b_meas, speed_meas, 1.0 / p, float(weights[0]), float(weights[1]), float(weights[2]),
+                i_b_meas, speed_meas, used, 1.0 / p, float(weights[0]), float(weights[1]), float(weights[2]),
                 int(exponent))
     out[rows] = res[:len(rows)]
     return out
 
 
-def startup_cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, weights, exponent):
+def current_mask(current_weight, n: int) -> np.ndarray:
+    """The per-sample flags the cost kernel reads: True where the current samples count
+    (``current_weight`` None: all of them)."""
+    if current_weight is None:
+        return np.ones(n, dtype=np.bool_)
+    used = np.ascontiguousarray(np.asarray(current_weight, dtype=np.bool_))
+    if used.shape != (n,):
+        raise ValueError(f"current_weight must have shape ({n},), got {used.shape}")
+    return used
+
+
+def startup_cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, weights, exponent,
+                       current_weight=None):
     """Eqs. 13-15 for a population: ``sum_j ka e(i_a) + kb e(i_b) + kw e(w_M)``.
 
     ``coef``: (n_pop, N_COEF) coefficient rows (NaN rows are invalid candidates).
     ``v_a, v_b``: stator voltages at the N sample instants, V. ``h``: sample time, s.
     ``*_meas``: measured currents (A) and mechanical speed (rad/s) at the same instants.
     ``weights``: (ka, kb, kw). ``exponent``: 2 (eq. 14, squares) or 1 (eq. 15, absolute).
+    ``current_weight``: (N,) bool or None; False masks the current samples of that instant
+    (``StartupRecord.weight``: clipped probes, a switching window): they add nothing, whatever
+    their value (the speed sample still counts), and the simulation runs through them. None
+    (all count) gives the unmasked cost bit for bit.
     The simulation starts from rest with zero flux at the first sample. Returns (n_pop,),
     ``+inf`` for invalid or diverging candidates. Runs on as many threads as numba is set to
     use (``numba.set_num_threads``); the result does not depend on their number.
     """
     return _cost_batch(coef, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, p, weights, exponent, LANES,
-                       numba.get_num_threads())
+                       numba.get_num_threads(), current_weight)
 
 
 def _outputs_batch(coef, v_a, v_b, linear, h, p, lanes, n_blocks):
@@ -381,6 +415,22 @@ def startup_outputs_batch(coef, v_a, v_b, linear, h, p):
 
 
 @numba.njit(cache=True)
+def substep_voltages(v_a, v_b, k, linear, j, substeps):
+    """Input of sub-step ``j`` of ``substeps`` in the sample interval ``k``: its start fraction
+    ``f0`` and the voltages at its start, midpoint and end (held, or interpolated linearly
+    between samples ``k`` and ``k+1``). Shared by :func:`simulate_states` and the extended
+    model's stepper."""
+    va0, vb0 = v_a[k], v_b[k]
+    dva = v_a[k + 1] - va0 if linear else 0.0
+    dvb = v_b[k + 1] - vb0 if linear else 0.0
+    f0 = j / substeps
+    fm = (j + 0.5) / substeps
+    f1 = (j + 1.0) / substeps
+    return (f0, va0 + f0 * dva, vb0 + f0 * dvb, va0 + fm * dva, vb0 + fm * dvb, va0 + f1 * dva,
+            vb0 + f1 * dvb)
+
+
+@numba.njit(cache=True)
 def simulate_states(c, v_a, v_b, linear, h, substeps, x0):
     """One trajectory with ``substeps`` RK4 steps per sample (the reference plant).
 
@@ -400,20 +450,9 @@ def simulate_states(c, v_a, v_b, linear, h, substeps, x0):
         out[k, 4] = w
         if k == n - 1:
             break
-        va0, vb0 = v_a[k], v_b[k]
-        dva = v_a[k + 1] - va0 if linear else 0.0
-        dvb = v_b[k + 1] - vb0 if linear else 0.0
         for j in range(substeps):
-            f0 = j / substeps
-            fm = (j + 0.5) / substeps
-            f1 = (j + 1.0) / substeps
-            i_a, i_b, psi_a, psi_b, w = _rk4(
-                c, i_a, i_b, psi_a, psi_b, w,
-                va0 + f0 * dva, vb0 + f0 * dvb,
-                va0 + fm * dva, vb0 + fm * dvb,
-                va0 + f1 * dva, vb0 + f1 * dvb,
-                hs,
-            )
+            f0, va0, vb0, vam, vbm, va1, vb1 = substep_voltages(v_a, v_b, k, linear, j, substeps)
+            i_a, i_b, psi_a, psi_b, w = _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, hs)
     return out
 
 
