@@ -7,6 +7,15 @@ zero sequence) and applies what it finds:
 * switch-on: a pre-trigger (zero voltage before the contactor closes) is trimmed to a few
   samples, so the simulation starts from rest at zero voltage; contact bounce is kept (the
   model is fed the measured voltages);
+* switching steps (measured voltages): the poles close, and their arcs end, between samples,
+  and a linearly interpolated sampled step puts up to half a sample of volt-seconds too many
+  or too few into the model, whose flux error lasts for the machine's time constants. The
+  steps in the first 20 ms after the switch-on are found, the fraction of its sample each
+  step falls in is estimated from the current's response
+  (:func:`benchmark.problems.timedomain.record_conditioning.switching_steps`), the voltage
+  sample before each step corrected so that the volt-seconds are the measured ones, and the
+  current samples of the switching window (which the interpolation cannot follow within a
+  sample) masked, with the count reported;
 * sensor offsets: estimated from the pre-trigger, else from whole supply periods of the
   steady tail, and removed when they are significant: larger than
   :data:`OFFSET_SIGNIFICANCE` of the channel's amplitude (0.3 V on a 325 V phase, 9 mA on a
@@ -32,7 +41,12 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import condition_record
+from benchmark.problems.timedomain.record_conditioning import (
+    SwitchingSteps,
+    condition_record,
+    sampled_volt_seconds,
+    switching_steps,
+)
 
 #: An offset is removed only when it exceeds this fraction of its channel's amplitude.
 OFFSET_SIGNIFICANCE = 1e-3
@@ -93,6 +107,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
                     f"({report.n_kept_before} kept before it; contact bounce kept)")
     else:
         said.append("no pre-trigger: the record starts energised")
+    said.extend(report.notes)
     removed, kept = [], []
     offsets = {name: (value, unit, how) for name, value, unit, how in report.offsets}
     from_tail = report.switch_on is None or report.switch_on < 50
@@ -134,13 +149,46 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         said.append(f"speed offset {report.speed_offset:+.4g} rad/s (rest before switch-on) removed")
     if report.speed_check is not None:
         said.append(report.speed_check.line())
-    if first == 0 and not removed and not n_masked and speed_out is rec.speed:
+    steps = None
+    if measured_voltage and report.switch_on is not None:
+        v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
+        i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
+        steps = switching_steps(v_a[first:], v_b[first:], i_a[first:], i_b[first:], report.switch_on - first, ts)
+        if steps.steps:
+            said.append(switching_line(steps, ts, int((steps.mask & weight).sum())))
+            weight = weight & ~steps.mask
+        else:
+            steps = None
+    n_masked = int((~weight).sum())
+    if first == 0 and not removed and not n_masked and speed_out is rec.speed and steps is None:
         return rec, said
     v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
     i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
     sl = slice(first, n)
+    v_a, v_b = (v_a[sl], v_b[sl]) if steps is None else (steps.v_a, steps.v_b)
+    if steps is not None:
+        # a measured switch-on: the sampled voltages are those of a continuous supply
+        after = steps.steps[-1] + 2
+        v_a, v_b = sampled_volt_seconds(v_a, after), sampled_volt_seconds(v_b, after)
+        said.append(f"measured supply voltages from t = {after * ts:.4f} s on: the volt-seconds the linear "
+                    "interpolation loses between samples of a continuous voltage restored (second difference / 12)")
     return StartupRecord(
-        t=rec.t[sl] - rec.t[first], v_alpha=v_a[sl], v_beta=v_b[sl], i_alpha=i_a[sl], i_beta=i_b[sl],
+        t=rec.t[sl] - rec.t[first], v_alpha=v_a, v_beta=v_b, i_alpha=i_a[sl], i_beta=i_b[sl],
         speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
         weight=None if not n_masked else weight,
     ), said
+
+
+def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:
+    """The report line of the switching steps of a switch-on."""
+    k1, k2 = steps.steps[0], steps.steps[-1]
+    span = 1e3 * (k2 + 1 - k1) * ts
+    where = (f"{len(steps.steps)} voltage steps between samples in the switch-on's first {span:.3g} ms "
+             "(contactor poles closing, arcs ending)")
+    if steps.inductance is None:
+        how = "their volt-seconds could not be estimated from the current (left as sampled)"
+    else:
+        how = (f"their volt-seconds corrected from the current's response (transient inductance "
+               f"{1e3 * steps.inductance:.4g} mH; fractions of the sample after the step "
+               + ", ".join(f"{f:.2f}" for f in steps.fractions) + ")")
+    return f"{where}: {how}; {n_masked} current samples of the switching window masked"

@@ -164,3 +164,41 @@ def test_condition_record_report():
     assert tail_rep.switch_on is None and tail_rec.first == 0
     assert "nothing trimmed" in tail_rep.lines()[1]
     assert [o[1] for o in tail_rep.offsets] == pytest.approx([*V_OFF, *I_OFF], abs=0.05)
+
+
+def vf_record(seed=0):
+    """A V/f inverter start (sampled reference voltages, ``zoh``-like): the frequency ramps from
+    0 and the voltage from a 2.5 % boost, so the first milliseconds carry a live voltage of a few
+    volts, nearly DC, below the switch-on's contact level, driving a current of several amperes."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(N) * TS
+    f = F0 * np.minimum(t / 0.5, 1.0)
+    th = 2 * np.pi * np.cumsum(f) * TS
+    amp = 325 * (0.025 + 0.975 * f / F0)
+    v = np.stack([amp * np.cos(th - 2 * np.pi * k / 3) for k in range(3)]) + 0.3 * rng.standard_normal((3, N))
+    # the current: a first-order response of a 1 ohm, 10 ms winding to each phase voltage
+    i = np.zeros((2, N))
+    for k in range(2):
+        for n in range(1, N):
+            i[k, n] = i[k, n - 1] + TS / 0.01 * (v[k, n - 1] / 1.0 - i[k, n - 1])
+    return v, i + 0.02 * rng.standard_normal((2, N))
+
+
+def test_live_low_voltage_at_the_start_is_no_pre_trigger():
+    """A V/f start's boost voltage is below the contact level, yet current flows from the first
+    sample: no pre-trigger, and the start-up current is not taken for a sensor offset."""
+    v, i = vf_record()
+    assert detect_switch_on(v, TS) not in (None, 0)  # the voltage alone looks like a late switch-on
+    _, rep = condition_record(v, i, TS, f0=F0)
+    assert rep.switch_on is None, rep.switch_on
+    assert any("rest level" in n and "no pre-trigger" in n for n in rep.notes), rep.notes
+    offs = {name: value for name, value, unit, how in rep.offsets}
+    assert abs(offs["i_r"]) < 0.1 and abs(offs["i_s"]) < 0.1, offs  # true offsets: 0
+
+
+def test_true_pre_trigger_is_kept_with_the_rest_check():
+    v, i, _, _ = record()
+    _, rep = condition_record(v, i, TS, f0=F0)
+    assert rep.switch_on is not None and abs(rep.switch_on - K_ON) <= 2
+    offs = {name: value for name, value, unit, how in rep.offsets}
+    assert abs(offs["i_r"] - I_OFF[0]) < 0.01 and abs(offs["i_s"] - I_OFF[1]) < 0.01, offs
