@@ -40,7 +40,10 @@ class EffectContext:
     start-up, J), L_M (magnetising inductance of the base model, H), L_sigma (leakage, H);
     sample_time (s), duration (s) of the start-up record, pole_pairs, J (the base model's
     inertia, kg m^2) and T_acc (N m, the mean torque that accelerates J to the final speed:
-    ``J w_end / t_90``, a scale for load torques, about 1-2 times a motor's rated torque).
+    ``J w_end / t_90``, a scale for load torques, about 1-2 times a motor's rated torque);
+    load_change (s from the record's start, or None): where the current's envelope changes most
+    abruptly after the start-up has reached speed (a load step's likely instant, a starting
+    value for effects that step; see :func:`load_change_time`).
     """
 
     w_e: float
@@ -56,6 +59,7 @@ class EffectContext:
     pole_pairs: int = 1
     J: float = 0.0
     T_acc: float = 0.0
+    load_change: float | None = None
 
     @property
     def flux(self) -> float:
@@ -273,4 +277,39 @@ def effect_context(t: np.ndarray, v_a: np.ndarray, v_b: np.ndarray, i_a: np.ndar
         E_cu=max(E_in - E_kin, 1e-9), L_M=float(L_M), L_sigma=float(L_sigma),
         sample_time=dt, duration=float(t[-1] - t[0]), pole_pairs=int(pole_pairs), J=float(J),
         T_acc=float(J * 0.9 * max(w_end, 1e-9) / max(t90, dt)),
+        load_change=load_change_time(t, np.hypot(i_a, i_b), w_e, t90),
     )
+
+
+#: A change of the current envelope smaller than this fraction of its level after the start-up
+#: is no load change.
+LOAD_CHANGE_MIN = 0.05
+
+
+def load_change_time(t: np.ndarray, i_mag: np.ndarray, w_e: float, t90: float) -> float | None:
+    """Where the current envelope changes most abruptly after the start-up (s from ``t[0]``),
+    or None when it changes by less than :data:`LOAD_CHANGE_MIN` of its level.
+
+    ``i_mag``: the current space vector's magnitude (A); ``w_e``: supply angular frequency
+    (rad/s); ``t90``: time to 90 % of the final speed (s). The envelope is the magnitude's mean
+    over one supply period; its change is the difference of the means over the period after and
+    the period before each instant, looked at from two periods after ``t90`` to two before the
+    end. A load that steps up draws more current from that instant on."""
+    n = len(t)
+    if n < 8 or w_e <= 0:
+        return None
+    dt = float(t[1] - t[0])
+    per = max(2, int(round(2 * np.pi / w_e / dt)))
+    start = int(np.searchsorted(t - t[0], t90)) + 2 * per
+    if start + 2 * per >= n:
+        return None
+    c = np.concatenate([[0.0], np.cumsum(i_mag)])
+    k = np.arange(start, n - per)
+    after = (c[k + per] - c[k]) / per
+    before = (c[k] - c[k - per]) / per
+    jump = after - before
+    j = int(np.argmax(np.abs(jump)))
+    level = float(np.mean(i_mag[start:]))
+    if level <= 0 or abs(jump[j]) < LOAD_CHANGE_MIN * level:
+        return None
+    return float(t[k[j]] - t[0])

@@ -324,8 +324,13 @@ class LoadTorque(Effect):
         return np.array([0.0, 0.0, 0.0, 0.02]), np.array([1.5, 1.5, 1.5, 0.98])
 
     def extra_starts(self, ctx):
-        return [np.array([0.1, 0.1, 0.0, 0.5]), np.array([0.0, 0.0, 0.2, 0.35]), np.array([0.0, 0.0, 0.2, 0.65]),
-                np.array([0.0, 0.0, 0.2, 0.85])]
+        starts = [np.array([0.1, 0.1, 0.0, 0.5]), np.array([0.0, 0.0, 0.2, 0.35]), np.array([0.0, 0.0, 0.2, 0.65]),
+                  np.array([0.0, 0.0, 0.2, 0.85])]
+        change = getattr(ctx, "load_change", None)
+        if change is not None:  # a step where the current envelope jumps, tried right after the first
+            lo, hi = self.extra_bounds(ctx)
+            starts.insert(1, np.array([0.0, 0.0, 0.2, float(np.clip(change / ctx.record_duration, lo[3], hi[3]))]))
+        return starts
 
     def augment(self, rows, extras, ctx):
         rows = rows.copy()
