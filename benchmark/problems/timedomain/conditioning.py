@@ -12,7 +12,7 @@ zero sequence) and applies what it finds:
   or too few into the model, whose flux error lasts for the machine's time constants. The
   steps in the first 20 ms after the switch-on are found, the fraction of its sample each
   step falls in is estimated from the current's response
-  (:func:`benchmark.problems.timedomain.record_conditioning.switching_steps`), the voltage
+  (:func:`benchmark.problems.timedomain.switch_on.switching_steps`), the voltage
   sample before each step corrected so that the volt-seconds are the measured ones, and the
   current samples of the switching window (which the interpolation cannot follow within a
   sample) masked, with the count reported;
@@ -41,12 +41,8 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import (
-    SwitchingSteps,
-    condition_record,
-    sampled_volt_seconds,
-    switching_steps,
-)
+from benchmark.problems.timedomain.record_conditioning import condition_record
+from benchmark.problems.timedomain.switch_on import SwitchingSteps, sampled_volt_seconds, switching_steps
 
 #: An offset is removed only when it exceeds this fraction of its channel's amplitude.
 OFFSET_SIGNIFICANCE = 1e-3

@@ -25,17 +25,17 @@ import yaml
 
 from benchmark.core.errors import ConfigError, DataError
 from benchmark.core.problem import Problem
+from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config: the harness's hook)
+    check_config,
+    choose_bounds,
+    derive_bounds,
+)
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.filters import zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
-from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config: the harness's hook)
-    check_config,
-    choose_bounds,
-    derive_bounds,
-)
 
 
 class TimeDomainProblem(Problem):
