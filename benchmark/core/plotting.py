@@ -224,6 +224,8 @@ def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str
     info = r.get("problem_info") or {}
     if info.get("data"):
         lines += [f"Data: {info['data']}", ""]
+    if info.get("conditioning"):  # what the problem's loader did to the record (bench records)
+        lines += ["Conditioning on load:", ""] + [f"- {c}" for c in info["conditioning"]] + [""]
     evals = f"{r.get('evaluations')} evaluations"
     pol = (r.get("polish") or {}).get("evaluations")
     if pol:

@@ -104,3 +104,18 @@ def test_torque_column_and_no_speed_column(tmp_path):
     assert not ds.has_speed and np.isnan(rec.speed).all()
     assert rec.torque is not None and np.isfinite(rec.torque).all()
     assert np.mean(rec.torque[-1000:]) > 0.05 * np.max(np.abs(rec.torque))  # the load's torque at the end
+
+
+def test_conditioning_is_reported_in_report_md(tmp_path):
+    """What the conditioning did reaches result.json (problem_info) and report.md."""
+    from benchmark.core.plotting import write_report
+    from benchmark.problems.timedomain.problem import TimeDomainProblem
+
+    ds, _, _ = _bench(tmp_path, ["sensor_offset"], seed=2, forms={"sensor_offset": "both"})
+    lo = np.array([0.1, 0.01, 0.001, 0.1, 0.001, 0.0, 0.0])
+    info = TimeDomainProblem(ds, lo, lo * 10 + 1.0).describe()
+    assert info["conditioning"] == list(ds.conditioning) and info["conditioning"]
+    report = write_report(tmp_path, {"problem": "timedomain", "problem_info": info}, [], [])
+    text = report.read_text()
+    assert "Conditioning on load:" in text
+    assert all(f"- {line}" in text for line in ds.conditioning)
