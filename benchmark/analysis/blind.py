@@ -17,9 +17,9 @@ the truth afterwards. Sources:
 Scores (:func:`summarise`): a verdict counts right when its effect set equals the injected
 set (``none`` for an effect-free set; an extra name is a miss; ``unexplained`` names no
 effect), whatever its status; with Wilson 95 % intervals. False alarms: effect-free sets
-whose status is not ``no_gap``. Two-effect sets: both injected effects named. Injected
-effects the base model cannot see (the diagnosis's own base held-out gap within the noise
-band: status ``no_gap``) are left out of the score and listed.
+whose status is not ``no_gap``. Two-effect sets: both injected effects named. An injected effect
+the conditioning removed and named (offsets, clipped or flattened currents) counts as found. Injected
+effects the base model cannot see (its held-out gap within the noise band) are left out and listed.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
 IN_BASE = {2: ("coulomb_friction",), 1: ()}
 
 
-def _float_or_none(v) -> float | None:
+def _float_or_none(v) -> float | None:  # noqa: D103
     return None if v is None else float(v)
 
 
@@ -306,17 +306,12 @@ def motulator_source(settings: BlindSettings):
 SOURCES = {"own": own_source, "plant": plant_source, "motulator": motulator_source}
 
 
-# -- scoring -----------------------------------------------------------------------------------
 def label_of(effects) -> str:
     return "+".join(sorted(effects)) or "none"
 
 
 def predicted_label(doc: dict) -> str:
-    if doc["status"] == "no_gap":
-        return "none"
-    if doc["status"] == "unexplained":
-        return "unexplained"
-    return label_of(doc["effects"])
+    return {"no_gap": "none", "unexplained": "unexplained"}.get(doc["status"]) or label_of(doc["effects"])
 
 
 def summarise(rows: list[dict]) -> dict:
@@ -423,13 +418,18 @@ def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dic
 
 
 def score_row(index: int, effects: list, doc: dict) -> dict:
-    """One scored row: the injected ``effects`` against the diagnosis document ``doc``."""
+    """One scored row: the injected ``effects`` against the diagnosis document ``doc``; an injected
+    effect the conditioning removed and named (``removed_by_conditioning``) counts as found."""
+    conditioned = [e for e in doc.get("removed_by_conditioning", []) if e in effects]
+    named = [e for e in effects if e in conditioned or e in doc["effects"]]
+    named += [e for e in doc["effects"] if e not in effects]
     return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
-            "predicted": predicted_label(doc), "status": doc["status"], "verdict": doc["verdict"],
-            "effects": list(doc["effects"]), "explained_share": float(doc["explained_share"]),
+            "predicted": label_of(named) if conditioned else predicted_label(doc), "status": doc["status"],
+            "verdict": doc["verdict"], "effects": named if conditioned else list(doc["effects"]),
+            "conditioned": conditioned, "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
-            "invisible": bool(effects) and doc["status"] == "no_gap"}
+            "invisible": bool(effects) and doc["status"] == "no_gap" and not conditioned}
 
 
 def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: str, title: str) -> dict:

@@ -88,3 +88,25 @@ def test_settings_are_made_once_from_the_config_and_the_draws_use_each_effects_o
     diag = diagnosis_config(s, Path("/some/folder"))
     assert diag.data.path == "/some/folder" and list(diag.effects) == [] and diag.figures is False
     assert s.run["motor"]["parameters"]["Rs"] == cfg.motor.parameters.Rs  # the settings' copy is untouched
+
+
+def test_an_effect_the_conditioning_removed_counts_as_found():
+    """Issue 13: effects that conditioning removes count as found when its report names them;
+    a name only the conditioning gives is not credited when it was not injected."""
+    from benchmark.analysis.blind import score_row
+    from benchmark.problems.timedomain.conditioning import effects_removed
+
+    lines = ["start-up record: offsets removed: i_r +0.184 A (pre-trigger mean)",
+             "start-up record: 7084 current samples masked: 0 hard-clipped, 7644 on flattened (soft-saturated) peaks",
+             "start-up record: 3 current samples of the switching window masked"]
+    assert effects_removed(lines) == ["sensor_offset", "current_sensor_saturation"]
+    assert effects_removed(lines[2:]) == []
+    gap = {"heldout_rms_over_noise": 1.0}
+    doc = {"status": "unexplained", "verdict": "unexplained", "effects": [], "explained_share": 0.0,
+           "gap_before": gap, "gap_after": gap, "removed_by_conditioning": ["sensor_offset"]}
+    row = score_row(0, ["sensor_offset"], doc)
+    assert row["predicted"] == "sensor_offset" == row["truth"] and not row["invisible"]
+    row = score_row(1, ["sensor_offset", "two_mass"], {**doc, "status": "explained", "effects": ["two_mass"]})
+    assert row["predicted"] == row["truth"] == "sensor_offset+two_mass"
+    row = score_row(2, [], {**doc, "status": "no_gap"})  # an offset on an effect-free set: not an effect
+    assert row["predicted"] == "none" and row["conditioned"] == []

@@ -188,3 +188,24 @@ def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:
                f"{1e3 * steps.inductance:.4g} mH; fractions of the sample after the step "
                + ", ".join(f"{f:.2f}" for f in steps.fractions) + ")")
     return f"{where}: {how}; {n_masked} current samples of the switching window masked"
+
+
+#: The effect each kind of conditioning line removes (the diagnosis lists them; the blind
+#: evaluation counts them as found, issue 13: "effects that conditioning removes count as found
+#: when the conditioning report names them").
+REMOVED_BY_LINE = (("offsets removed: ", "sensor_offset"),
+                   (" current samples masked: ", "current_sensor_saturation"))
+
+
+def effects_removed(lines) -> list[str]:
+    """Effects the conditioning removed, from its report ``lines`` (the dataset's
+    ``conditioning``): sensor offsets removed, clipped or flattened current samples masked
+    (the switching window's masked samples are not an effect)."""
+    found = []
+    for line in lines or []:
+        for key, effect in REMOVED_BY_LINE:
+            if key in line and effect not in found:
+                if effect == "current_sensor_saturation" and " 0 hard-clipped, 0 on flattened" in line:
+                    continue
+                found.append(effect)
+    return found

@@ -104,6 +104,9 @@ def render_markdown(doc: dict) -> str:
         lines.append(f"Best candidates, removing too little to explain the gap: {', '.join(doc['weak_effects'])}.")
     for ex in doc["excluded"]:
         lines.append(f"Not a candidate: {ex['effect']}: {ex['reason']}.")
+    if doc.get("removed_by_conditioning"):
+        lines.append("Found and removed by the conditioning on load (the diagnosis ran on the conditioned record): "
+                     + ", ".join(doc["removed_by_conditioning"]) + ".")
     lines += ["", "## Where the base model misses", "",
               f"chi^2 per held-out residual: {loc['chi2_per_residual']:.3f}", "",
               "| channel | share of residual energy |", "|---|---|"]
