@@ -326,7 +326,7 @@ class LoadTorque(Effect):
     def extra_starts(self, ctx):
         starts = [np.array([0.1, 0.1, 0.0, 0.5]), np.array([0.0, 0.0, 0.2, 0.35]), np.array([0.0, 0.0, 0.2, 0.65]),
                   np.array([0.0, 0.0, 0.2, 0.85])]
-        change = getattr(ctx, "load_change", None)
+        change = ctx.load_change
         if change is not None:  # a step where the current envelope jumps, tried right after the first
             lo, hi = self.extra_bounds(ctx)
             starts.insert(1, np.array([0.0, 0.0, 0.2, float(np.clip(change / ctx.record_duration, lo[3], hi[3]))]))

@@ -68,34 +68,38 @@ def steady_tail(i: np.ndarray, ts: float, f0: float, periods: int = 5) -> bool:
 
 def condition_dataset(ds: StartupDataset) -> StartupDataset:
     """The data set with every start-up record conditioned (see the module docstring)."""
-    records, lines = [], []
+    records, lines, removed = [], [], []
     for k, rec in enumerate(ds.startups):
         name = f"startup record {k + 1}" if len(ds.startups) > 1 else "start-up record"
-        new, said = condition_startup(rec, ds.sample_time, ds.pole_pairs, ds.supply_frequency,
+        new, said, found = condition_startup(rec, ds.sample_time, ds.pole_pairs, ds.supply_frequency,
                                       measured_voltage=ds.input_hold != "zoh")
         records.append(new)
         lines += [f"{name}: {s}" for s in said]
-    return replace(ds, startups=records, conditioning=list(ds.conditioning) + lines)
+        removed += [e for e in found if e not in removed]
+    return replace(ds, startups=records, conditioning=list(ds.conditioning) + lines,
+                   conditioning_removed=list(ds.conditioning_removed) + removed)
 
 
 def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_frequency: float | None,
-                      measured_voltage: bool = True) -> tuple[StartupRecord, list[str]]:
-    """One record conditioned, and what was done (plain-English lines)."""
+                      measured_voltage: bool = True) -> tuple[StartupRecord, list[str], list[str]]:
+    """One record conditioned, what was done (plain-English lines), and the effects it found and
+    removed (``sensor_offset``: offsets removed; ``current_sensor_saturation``: clipped or
+    flattened current samples masked; the switching window's masked samples are no effect)."""
     n = len(rec.t)
     v = np.vstack(inverse_clarke(rec.v_alpha, rec.v_beta))
     i_r, i_s, _ = inverse_clarke(rec.i_alpha, rec.i_beta)
     i = np.vstack([i_r, i_s])
     if not np.any(v) or n < 16:
-        return rec, ["not conditioned: no voltage or too few samples"]
+        return rec, ["not conditioned: no voltage or too few samples"], []
     speed = rec.speed if rec.has_speed else None
     with np.errstate(all="ignore"):
         try:
             cond, report = condition_record(v, i, ts, speed, f0=supply_frequency, p=pole_pairs,
                                             soft=measured_voltage)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError, IndexError) as exc:
-            return rec, [f"not conditioned ({type(exc).__name__}: {exc})"]
+            return rec, [f"not conditioned ({type(exc).__name__}: {exc})"], []
     if not np.isfinite(report.f0) or report.f0 <= 0 or n * ts * report.f0 < MIN_PERIODS:
-        return rec, ["not conditioned: fewer than three supply periods"]
+        return rec, ["not conditioned: fewer than three supply periods"], []
     said = [f"supply frequency {report.f0:.3f} Hz ({report.f0_source})"]
     first = cond.first
     if report.switch_on is not None:
@@ -139,6 +143,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     if n_masked:
         said.append(f"{n_masked} current samples masked: {sum(report.n_clipped)} hard-clipped, "
                     f"{sum(report.n_saturated)} on flattened (soft-saturated) peaks")
+    found = (["sensor_offset"] if removed else []) + (["current_sensor_saturation"] if n_masked else [])
     speed_out = rec.speed
     if speed is not None and np.isfinite(report.speed_offset):
         speed_out = rec.speed - report.speed_offset
@@ -157,7 +162,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
             steps = None
     n_masked = int((~weight).sum())
     if first == 0 and not removed and not n_masked and speed_out is rec.speed and steps is None:
-        return rec, said
+        return rec, said, found
     v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
     i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
     sl = slice(first, n)
@@ -172,7 +177,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         t=rec.t[sl] - rec.t[first], v_alpha=v_a, v_beta=v_b, i_alpha=i_a[sl], i_beta=i_b[sl],
         speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
         weight=None if not n_masked else weight,
-    ), said
+    ), said, found
 
 
 def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:
@@ -188,24 +193,3 @@ def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:
                f"{1e3 * steps.inductance:.4g} mH; fractions of the sample after the step "
                + ", ".join(f"{f:.2f}" for f in steps.fractions) + ")")
     return f"{where}: {how}; {n_masked} current samples of the switching window masked"
-
-
-#: The effect each kind of conditioning line removes (the diagnosis lists them; the blind
-#: evaluation counts them as found, issue 13: "effects that conditioning removes count as found
-#: when the conditioning report names them").
-REMOVED_BY_LINE = (("offsets removed: ", "sensor_offset"),
-                   (" current samples masked: ", "current_sensor_saturation"))
-
-
-def effects_removed(lines) -> list[str]:
-    """Effects the conditioning removed, from its report ``lines`` (the dataset's
-    ``conditioning``): sensor offsets removed, clipped or flattened current samples masked
-    (the switching window's masked samples are not an effect)."""
-    found = []
-    for line in lines or []:
-        for key, effect in REMOVED_BY_LINE:
-            if key in line and effect not in found:
-                if effect == "current_sensor_saturation" and " 0 hard-clipped, 0 on flattened" in line:
-                    continue
-                found.append(effect)
-    return found

@@ -110,6 +110,8 @@ class StartupDataset:
     nameplate : {rated_power (W), voltage (V line-line rms), current (A rms), speed (rpm),
         frequency (Hz)}, any subset, or None.
     conditioning : what the conditioning on load did (plain-English lines for report.md).
+    conditioning_removed : the effects it found and removed (``sensor_offset``,
+        ``current_sensor_saturation``): the diagnosis lists them, the blind scores count them.
     """
 
     pole_pairs: int
@@ -125,6 +127,7 @@ class StartupDataset:
     winding_temperature: float | None = None
     nameplate: dict | None = None
     conditioning: list[str] = field(default_factory=list)
+    conditioning_removed: list[str] = field(default_factory=list)
 
     @property
     def has_speed(self) -> bool:

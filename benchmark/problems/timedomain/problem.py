@@ -327,7 +327,7 @@ class TimeDomainProblem(Problem):
             "samples": int(sum(len(r[0]) for r in self._records)),
             "sample_time": self.dataset.sample_time,
             "input_hold": self.dataset.input_hold,
-            "conditioning": list(getattr(self.dataset, "conditioning", None) or []),
+            "conditioning": list(self.dataset.conditioning),
             "cost": {"exponent": self.exponent, "weights": dict(zip(WEIGHT_KEYS, self.weights.tolist(), strict=True))},
         }
         if self.mechanical is not None:

@@ -38,6 +38,7 @@ def test_pre_trigger_trimmed_and_offsets_recovered(tmp_path):
     assert abs(trimmed * 1e-4 - (pre - 10e-4)) <= 2e-4, (trimmed, pre)
     text = "\n".join(ds.conditioning)
     assert "pre-trigger samples trimmed" in text and "offsets removed" in text
+    assert ds.conditioning_removed == ["sensor_offset"]  # named for the diagnosis and the blind scores
     # the alpha-beta offsets left in the conditioned record: the pre-trigger mean is ~0 now
     v_off = np.array(eff["voltage_offsets"])
     v_diff = v_off - v_off.mean()  # a common-mode offset does not reach alpha-beta
@@ -60,6 +61,7 @@ def test_hard_clipped_current_samples_are_masked(tmp_path):
     n_masked = int((~rec.weight).sum())
     assert n_masked > 20, ds.conditioning
     assert any("hard-clipped" in line for line in ds.conditioning)
+    assert "current_sensor_saturation" in ds.conditioning_removed
     # the masked samples are the start-up's peaks: where a phase current sits at the clip level
     level = truth["effects"][0]["level"]
     i_r = rec.i_alpha  # phase R of a three-wire record is alpha (amplitude-invariant Clarke)
@@ -77,6 +79,7 @@ def test_a_clean_synthetic_record_is_left_as_it_is(tmp_path):
     out = condition_dataset(ds)
     assert out.startups[0] is ds.startups[0]  # nothing significant: the very same arrays
     assert any("no significant sensor offset" in line for line in out.conditioning)
+    assert out.conditioning_removed == []
 
 
 def test_bench_keys_of_meta_yaml(tmp_path):

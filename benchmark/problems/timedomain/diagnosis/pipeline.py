@@ -55,7 +55,6 @@ import numpy as np
 
 from benchmark.core.effects import Effect, effect_context
 from benchmark.core.uncertainty import ar1_coefficient, misfit_ratio
-from benchmark.problems.timedomain.conditioning import effects_removed
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.noise import combined
@@ -441,8 +440,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
                   for ch, v in data.noise.items()},
         "noise_level": data.sigma,
         "facts": {k: v for k, v in facts.items()},
-        "conditioning": list(getattr(ds, "conditioning", None) or []),
-        "removed_by_conditioning": effects_removed(getattr(ds, "conditioning", None)),
+        "conditioning": list(ds.conditioning),
+        "removed_by_conditioning": list(ds.conditioning_removed),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
