@@ -145,6 +145,7 @@ def make_dataset(run) -> tuple[StartupDataset, dict]:
         startups=[startup],
         stops=stops,
         input_hold=test.input_hold,
+        chord_voltage=test.input_hold == "linear",  # the plant interpolates its samples linearly
         dc_link_voltage=test.dc_link_voltage,
         supply_frequency=test.supply_frequency,
         inertia=float(motor.J) if run["motor"].get("inertia_known", False) else None,

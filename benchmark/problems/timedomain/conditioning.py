@@ -72,19 +72,29 @@ def condition_dataset(ds: StartupDataset) -> StartupDataset:
     for k, rec in enumerate(ds.startups):
         name = f"startup record {k + 1}" if len(ds.startups) > 1 else "start-up record"
         new, said, found = condition_startup(rec, ds.sample_time, ds.pole_pairs, ds.supply_frequency,
-                                      measured_voltage=ds.input_hold != "zoh")
+                                      measured_voltage=ds.input_hold != "zoh",
+                                      continuous_voltage=ds.input_hold == "linear" and not ds.chord_voltage)
         records.append(new)
         lines += [f"{name}: {s}" for s in said]
         removed += [e for e in found if e not in removed]
+    # restored samples are what the model's linear interpolation must see: written back, they
+    # are not restored a second time
     return replace(ds, startups=records, conditioning=list(ds.conditioning) + lines,
-                   conditioning_removed=list(ds.conditioning_removed) + removed)
+                   conditioning_removed=list(ds.conditioning_removed) + removed,
+                   chord_voltage=ds.chord_voltage or ds.input_hold == "linear")
 
 
 def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_frequency: float | None,
-                      measured_voltage: bool = True) -> tuple[StartupRecord, list[str], list[str]]:
+                      measured_voltage: bool = True, continuous_voltage: bool = False,
+                      ) -> tuple[StartupRecord, list[str], list[str]]:
     """One record conditioned, what was done (plain-English lines), and the effects it found and
     removed (``sensor_offset``: offsets removed; ``current_sensor_saturation``: clipped or
-    flattened current samples masked; the switching window's masked samples are no effect)."""
+    flattened current samples masked; the switching window's masked samples are no effect).
+
+    ``continuous_voltage``: the voltages are samples of a continuous voltage (``input_hold:
+    linear`` without ``chord_voltage``): the volt-seconds the model's linear interpolation loses
+    between samples are restored from the supply's switch-on (after its switching steps) on, or
+    over the whole record when it starts energised."""
     n = len(rec.t)
     v = np.vstack(inverse_clarke(rec.v_alpha, rec.v_beta))
     i_r, i_s, _ = inverse_clarke(rec.i_alpha, rec.i_beta)
@@ -161,15 +171,21 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         else:
             steps = None
     n_masked = int((~weight).sum())
-    if first == 0 and not removed and not n_masked and speed_out is rec.speed and steps is None:
+    continuous = continuous_voltage or steps is not None  # a measured switch-on: a continuous supply
+    if (first == 0 and not removed and not n_masked and speed_out is rec.speed and steps is None
+            and not continuous):
         return rec, said, found
     v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
     i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
     sl = slice(first, n)
     v_a, v_b = (v_a[sl], v_b[sl]) if steps is None else (steps.v_a, steps.v_b)
-    if steps is not None:
-        # a measured switch-on: the sampled voltages are those of a continuous supply
-        after = steps.steps[-1] + 2
+    if continuous:
+        if steps is not None:
+            after = steps.steps[-1] + 2
+        elif report.switch_on is not None:
+            after = report.switch_on - first + 2
+        else:
+            after = 1
         v_a, v_b = sampled_volt_seconds(v_a, after), sampled_volt_seconds(v_b, after)
         said.append(f"measured supply voltages from t = {after * ts:.4f} s on: the volt-seconds the linear "
                     "interpolation loses between samples of a continuous voltage restored (second difference / 12)")
@@ -177,6 +193,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         t=rec.t[sl] - rec.t[first], v_alpha=v_a, v_beta=v_b, i_alpha=i_a[sl], i_beta=i_b[sl],
         speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
         weight=None if not n_masked else weight,
+        switch_on_sample=None if steps is None else steps.steps[-1] + 1,
     ), said, found
 
 

@@ -46,7 +46,7 @@ SYNC_SPEED_MARGIN = 1.5
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
              "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
-             "conditioning")
+             "conditioning", "chord_voltage")
 #: Keys of ``nameplate`` in meta.yaml: rated power (W), voltage (V line-line rms), current (A rms),
 #: speed (rpm), frequency (Hz).
 NAMEPLATE_KEYS = ("rated_power", "voltage", "current", "speed", "frequency")
@@ -67,7 +67,10 @@ class StartupRecord:
     Attributes: t (s), v_alpha, v_beta (V), i_alpha, i_beta (A), speed (mechanical rad/s; all
     NaN when the record has no speed sensor), torque (N m, measured shaft torque, or None),
     weight (False where a current sample is masked by the conditioning, e.g. clipped; None: all
-    samples count).
+    samples count), switch_on_sample (the sample just after a measured switch-on's switching
+    steps, whose volt-seconds the conditioning corrected from the current's response: what is
+    left of their error is estimated with the parameters as a stator flux step there; None: no
+    such switch-on).
     """
 
     t: np.ndarray
@@ -79,6 +82,7 @@ class StartupRecord:
     source: str = "memory"
     torque: np.ndarray | None = None
     weight: np.ndarray | None = None
+    switch_on_sample: int | None = None
 
     @property
     def has_speed(self) -> bool:
@@ -104,6 +108,11 @@ class StartupDataset:
     pole_pairs : pole pairs p.
     sample_time : sample time of the start-up records, s.
     input_hold : ``zoh`` (switch-state voltages) or ``linear`` (sampled continuous voltages).
+    chord_voltage : True when a ``linear`` input is exactly the straight line between its samples
+        (data made by a simulator that interpolates its sampled input linearly, as this project's
+        generator does, or samples the conditioning has already restored); False (the default)
+        for a continuous voltage, whose volt-seconds the conditioning restores
+        (:func:`benchmark.problems.timedomain.switch_on.sampled_volt_seconds`).
     dc_link_voltage, supply_frequency, inertia : V, Hz, kg m^2, or None when not given.
     stator_dc_resistance : ohm per phase measured with DC (prior knowledge), or None.
     winding_temperature : deg C of the winding when the DC resistance was measured, or None.
@@ -119,6 +128,7 @@ class StartupDataset:
     startups: list[StartupRecord]
     stops: list[StopRecord] = field(default_factory=list)
     input_hold: str = "linear"
+    chord_voltage: bool = False
     dc_link_voltage: float | None = None
     supply_frequency: float | None = None
     inertia: float | None = None
@@ -148,6 +158,8 @@ class StartupDataset:
             "sample_time": float(self.sample_time),
             "input_hold": self.input_hold,
         }
+        if self.chord_voltage:
+            m["chord_voltage"] = True
         for key in ("dc_link_voltage", "supply_frequency", "inertia", "stator_dc_resistance",
                     "winding_temperature"):
             if getattr(self, key) is not None:
@@ -197,6 +209,9 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         optional["winding_temperature"] = float(theta)
     if meta.get("nameplate") is not None:
         optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])
+    chord = meta.get("chord_voltage", False)
+    if not isinstance(chord, bool):
+        raise DataError(meta_path, f"key 'chord_voltage' must be true or false, got {_short_repr(chord)}")
     conditioning_on = meta.get("conditioning", True)
     if not isinstance(conditioning_on, bool):
         raise DataError(meta_path, f"key 'conditioning' must be true or false, got {_short_repr(conditioning_on)}")
@@ -214,6 +229,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         startups=startups,
         stops=stops,
         input_hold=hold,
+        chord_voltage=chord,
         folder=str(folder),
         **optional,
     )

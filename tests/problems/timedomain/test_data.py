@@ -47,7 +47,9 @@ def test_phase_columns_give_the_same_alpha_beta(tmp_path, dataset):
     i_r, i_s, _ = inverse_clarke(r.i_alpha, r.i_beta)
     pd.DataFrame({"t": r.t, "v_r": v_r, "v_s": v_s, "v_t": v_t, "i_r": i_r, "i_s": i_s, "speed": r.speed}).to_csv(
         tmp_path / "startup.csv", index=False, float_format="%.17g")
-    (tmp_path / "meta.yaml").write_text("kind: startup\npole_pairs: 1\nsample_time: 8.333333333333333e-05\n")
+    # the generator's voltages are exactly linear between samples (chord_voltage: not restored)
+    (tmp_path / "meta.yaml").write_text("kind: startup\npole_pairs: 1\nsample_time: 8.333333333333333e-05\n"
+                                        "chord_voltage: true\n")
     back = load_startup_dataset(tmp_path).startups[0]
     np.testing.assert_allclose(back.v_alpha, r.v_alpha, atol=1e-9)
     np.testing.assert_allclose(back.v_beta, r.v_beta, atol=1e-9)
