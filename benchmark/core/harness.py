@@ -33,6 +33,7 @@ from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
 from benchmark.core.io import write_table_atomic, write_text_atomic
 from benchmark.core.journal import EvaluationJournal
+from benchmark.core.nuisance import refine_nuisance
 from benchmark.core.problem import OptimizeResult, Problem, Status
 from benchmark.core.progress import ProgressBar, progress_wanted
 from benchmark.core.quality import assess
@@ -345,6 +346,9 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     ident = polish_and_keep_better(problem, result, budgeted,
                                    int(cfg.polish_budget) if cfg.get("polish") else None)
     history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
+    nuisance = refine_nuisance(problem, x_best, f_best) if f_best is not None and np.isfinite(f_best) else None
+    if nuisance is not None and nuisance.accepted:
+        x_best, f_best = nuisance.x, nuisance.cost
     wall = time.perf_counter() - t_start
 
     data_path = (cfg.get("data") or {}).get("path")
@@ -377,11 +381,14 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "fit_quality": assessment["fit_quality"],
         "cost": _finite_or_none(f_best),
         "cost_optimizer": _finite_or_none(result.fun),
-        "evaluations": result.nfev + (polish_info or {}).get("evaluations", 0),
+        "evaluations": result.nfev + (polish_info or {}).get("evaluations", 0)
+        + (nuisance.evaluations if nuisance is not None else 0),
         "evaluations_optimizer": result.nfev,
         "budget": budget,
         "nit": result.nit,
         "polish": polish_info,
+        # record quantities estimated with the parameters (benchmark.core.nuisance), or None
+        "nuisance": None if nuisance is None else nuisance.record(),
         "time_limit_s": cfg.get("time_limit_s"),
         "wall_time_s": wall,
         "wall_time_optimizer_s": result.wall_time_s,

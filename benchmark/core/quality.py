@@ -30,6 +30,7 @@ import warnings as _warnings
 
 import numpy as np
 
+from benchmark.core.nuisance import JointView, has_nuisance
 from benchmark.core.uncertainty import correlation, hac_covariance, misfit_ratio, standard_errors, uncertainty_warnings
 
 #: Central-difference step, relative to each parameter (absolute floor: this times the bound span).
@@ -66,7 +67,12 @@ def parameter_uncertainty(problem, x) -> dict:
     Returns ``{"standard_error": {name: se}, "correlation": [[...]], "info": {...}}``; the
     standard errors are nan where not finite (rank-deficient Jacobian)."""
     names = list(problem.parameter_names)
-    r0, J = jacobian(problem, x)
+    k = len(names)
+    joint = None
+    if has_nuisance(problem):  # the nuisance is estimated too: its columns join the Jacobian
+        joint = JointView(problem)
+        x = np.concatenate([np.asarray(x, float), np.asarray(problem.nuisance_values, float)])
+    r0, J = jacobian(joint or problem, x)
     ok = np.all(np.isfinite(J), axis=1) & np.isfinite(r0)
     layout = residual_layout(problem, len(r0))
     groups = np.empty(len(r0), dtype=int)
@@ -75,7 +81,7 @@ def parameter_uncertainty(problem, x) -> dict:
     # drop rows that carry no information (zero weight, masked, non-finite); keep segments contiguous
     live = ok & (np.any(J != 0, axis=1) | (r0 != 0))
     Jl, rl, gl = J[live], r0[live], groups[live]
-    if len(rl) <= len(names):
+    if len(rl) <= J.shape[1]:
         raise ValueError("too few informative residuals for a covariance")
     floor_fn = getattr(problem, "hac_bandwidth_floor", None)
     floor = float(floor_fn()) if floor_fn is not None else 0.0
@@ -89,6 +95,11 @@ def parameter_uncertainty(problem, x) -> dict:
         involved = np.flatnonzero(np.abs(info.null_space).max(axis=1) > 1e-3)
         se[involved] = np.nan
     corr = correlation(cov)
+    nuisance = None
+    if joint is not None:
+        nuisance = {n: {"value": float(v), "standard_error": float(s) if np.isfinite(s) else None}
+                    for n, v, s in zip(problem.nuisance_names, x[k:], se[k:], strict=True)}
+        se, corr = se[:k], corr[:k, :k]
     return {
         "standard_error": {n: (float(s) if np.isfinite(s) else None) for n, s in zip(names, se, strict=True)},
         "correlation": [[(float(c) if np.isfinite(c) else None) for c in row] for row in corr],
@@ -96,7 +107,12 @@ def parameter_uncertainty(problem, x) -> dict:
             "method": "HAC sandwich (Newey-West, Andrews bandwidth, VAR(1) prewhitening) on the residual "
                       "Jacobian at the final point, per residual channel",
             "jacobian": f"central differences (one-sided at a bound), relative step {JACOBIAN_REL_STEP:g}",
-            "evaluations": 2 * len(names) + 1,
+            "evaluations": 2 * J.shape[1] + 1,
+            "nuisance": (None if nuisance is None else
+                         "marginalised: the Jacobian has a column per nuisance parameter (estimated with "
+                         "the motor's parameters) " + ", ".join(
+                             f"{n} = {d['value']:.4g} (standard error {d['standard_error'] or float('nan'):.2g})"
+                             for n, d in nuisance.items())),
             "counted_in_budget": False,
             "rank": int(info.rank),
             "bandwidth": float(info.bandwidth),

@@ -15,9 +15,12 @@ import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+import numpy as np
+
 from benchmark.core.effects import load_effects
 from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
+from benchmark.core.nuisance import refine_nuisance
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, diagnose
 from benchmark.problems.timedomain.problem import problem_from_dataset
@@ -38,18 +41,25 @@ def diagnosis_settings(run: Mapping) -> DiagnosisSettings:
 
 
 def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base_case: int,
-                  identify: Callable) -> dict[str, float]:
+                  identify: Callable) -> tuple[dict[str, float], StartupDataset]:
     """The base model's parameters: ``identify(problem)`` (the configured optimiser then polish)
-    on the record with the mechanical pre-identification of ``base_case``, bounds from the data."""
+    on the record with the mechanical pre-identification of ``base_case``, bounds from the data;
+    then the record's nuisance (a measured switch-on's flux step, :mod:`benchmark.core.nuisance`)
+    estimated with them. Returns the parameters and the data set with the nuisance applied (the
+    one the diagnosis's models are fitted to)."""
     settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None)
     problem = problem_from_dataset(settings, ds, truth=None)
     ident = identify(problem)
     if ident.x is None:
         raise ConfigError(f"optimizer: the base identification failed ({ident.result.message})")
-    est = problem.estimate(ident.x)
+    x = ident.x
+    refined = refine_nuisance(problem, x, ident.cost) if np.isfinite(ident.cost) else None
+    if refined is not None and refined.accepted:
+        x = refined.x
+    est = problem.estimate(x)
     if int(base_case) == 1:
         est["fc"] = 0.0
-    return est
+    return est, problem.dataset_with_nuisance()
 
 
 def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify: Callable,
@@ -60,7 +70,7 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
     problem_settings = TimeDomainSettings.from_run(run)
     candidates = run.get("candidates")
     effects = load_effects("timedomain", list(candidates) if candidates else None)
-    base = identify_base(problem_settings, dataset, settings.base_case, identify)
+    base, dataset = identify_base(problem_settings, dataset, settings.base_case, identify)
     t_base = time.perf_counter() - t0
     doc = diagnose(dataset, base, effects, settings, progress=progress)
     models = doc.pop("_models")
