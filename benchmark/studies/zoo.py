@@ -304,13 +304,14 @@ def report(runs: list[dict]) -> str:
                          "the data\" (by scenario: " + ", ".join(f"{sc} {sum(r['scenario'] == sc for r in flagged)}"
                                                                  for sc in scs) + ").")
         lines += ["", "On flagged records the estimate is biased by what the model lacks and the intervals, which "
-                  "describe noise, do not cover it: that is what the warning is for. On `dol` records two small "
-                  "biases remain even without the warning, each a few standard errors on these long, clean "
-                  "records (errors stay below 1 %): what is left of the contactor's switching steps after "
-                  "the conditioning's correction (independent plant: Rs high, Rr low), and, on records without "
-                  "a detected switch-on (motulator), the volt-seconds that linear interpolation between "
-                  "samples loses on a sine, about (w Ts)^2 / 12 (3e-4 at 60 Hz and 6 kHz), which the "
-                  "conditioning restores only after a measured switch-on.", ""]
+                  "describe noise, do not cover it: that is what the warning is for. Two biases of `dol` "
+                  "records are removed at their source: the volt-seconds that linear interpolation between "
+                  "samples loses on a sine, about (w Ts)^2 / 12 (3e-4 at 60 Hz and 6 kHz; Le up to 40 "
+                  "standard errors low on motulator's records), are restored by the conditioning on every "
+                  "sampled continuous voltage; what is left of the contactor's switching steps after the "
+                  "conditioning's correction (independent plant: Rs high, Rr low, up to 8 standard errors) "
+                  "is estimated with the parameters as a stator flux step (`nuisance` in `result.json`), and "
+                  "the intervals allow for it.", ""]
         lines += ["## Default pipeline, per record", "",
                   "| source | motor | kW | p | scenario | noise | worst error of Rs..J (%) | status | wall (s) | "
                   "warnings |",
