@@ -266,3 +266,34 @@ def test_a_record_without_speed_sensor_leaves_the_speed_out_of_the_residuals():
     r = model.residuals(x[None])[0]
     assert r.shape == (2 * len(rec.t) + len(data.stop_t),) and np.all(np.isfinite(r))
     assert np.sqrt(np.mean(r[:2 * len(rec.t)] ** 2)) < 50  # a sane scale: currents over their own noise
+
+
+def test_samples_the_conditioning_masked_weigh_nothing_in_the_diagnosis(paper_records):
+    """A saturating probe's masked samples (StartupRecord.weight False) are out of every fit and
+    of both folds, as they are out of the identification's cost."""
+    from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
+    from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
+    from benchmark.problems.timedomain.diagnosis.pipeline import SetFit
+
+    s = paper_records["startup"]
+    n = len(s["t"])
+    weight = np.ones(n, bool)
+    weight[100:400] = False
+    i_a = s["i_alpha"].copy()
+    i_a[100:400] *= 0.5  # what a saturated probe shows there: garbage the fits must not see
+    rec = StartupRecord(t=s["t"], v_alpha=s["v_alpha"], v_beta=s["v_beta"], i_alpha=i_a, i_beta=s["i_beta"],
+                        speed=s["speed"], weight=weight)
+    data = DiagnosisData.from_dataset(StartupDataset(pole_pairs=1, sample_time=1 / 12000, startups=[rec],
+                                                     input_hold="zoh"))
+    used = data.used()
+    assert (~used).sum() == 2 * 300  # i_alpha and i_beta, not the speed
+    a, b = data.folds()
+    assert not np.any((a | b) & ~used) and np.all((a | b) == used)
+    truth = {k: getattr(PAPER_MOTOR, k) for k in ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")}
+    model = JointModel(data, 2, [], _ctx(), truth, 1.0)
+    x = np.array([truth[k] for k in model.base_names])
+    r = model.residuals(x[None])[0]
+    assert np.all(r[~used] == 0.0)
+    assert np.sqrt(np.mean(r[used] ** 2)) < 0.05  # the true model fits what is left (noise-free record)
+    fit = SetFit(model, {"A": x, "B": x}, {"A": a, "B": b})
+    assert fit.held_used.size == used.sum() and fit.chi2 == pytest.approx(np.mean(r[used] ** 2))

@@ -61,6 +61,7 @@ class DiagnosisData:
     dc_link_voltage: float | None
     input_hold: str
     supply_frequency: float
+    current_used: np.ndarray | None = None  # (N,) False where the conditioning masked a current sample
 
     @classmethod
     def from_dataset(cls, ds: StartupDataset) -> DiagnosisData:
@@ -87,7 +88,8 @@ class DiagnosisData:
                    meas=meas, sample_time=ds.sample_time, linear=hold_is_linear(ds.input_hold),
                    pole_pairs=ds.pole_pairs, stop_t=stop_t, stop_speed=stop_speed, stop_w0=w0, noise=noise,
                    inertia=ds.inertia, dc_link_voltage=ds.dc_link_voltage, input_hold=str(ds.input_hold),
-                   supply_frequency=float(f_supply))
+                   supply_frequency=float(f_supply),
+                   current_used=None if r.weight is None else np.asarray(r.weight, bool).copy())
 
     @property
     def has_speed(self) -> bool:
@@ -133,16 +135,32 @@ class DiagnosisData:
             parts.append(self.t[-1] + self.stop_t)
         return np.concatenate(parts)
 
+    def used(self) -> np.ndarray:
+        """(n_residuals,) False at the current samples the conditioning masked (clipped or
+        flattened by a saturating probe, the switching window): they weigh nothing in any fit
+        and belong to no fold."""
+        parts = []
+        for c in self.startup_channels():
+            if c < 2 and self.current_used is not None:
+                parts.append(self.current_used)
+            else:
+                parts.append(np.ones(self.n_startup, bool))
+        if self.stop_t is not None:
+            parts.append(np.ones(len(self.stop_t), bool))
+        return np.concatenate(parts)
+
     def folds(self) -> tuple[np.ndarray, np.ndarray]:
         """Two interleaved folds of blocks (two supply periods of the start-up, one second of
-        the stop): each fold is a held-out set for a fit on the other."""
+        the stop): each fold is a held-out set for a fit on the other. Masked samples are in
+        neither."""
         block = 2.0 / self.supply_frequency
         kA = (np.floor((self.t - self.t[0]) / block).astype(int) % 2) == 0
         parts = [kA] * len(self.startup_channels())
         if self.stop_t is not None:
             parts.append((np.floor(self.stop_t / 1.0).astype(int) % 2) == 0)
         a = np.concatenate(parts)
-        return a, ~a
+        used = self.used()
+        return a & used, ~a & used
 
     def facts(self, base_case: int) -> dict:
         """What the experiment says about itself: which effects can occur in it."""
@@ -188,7 +206,7 @@ class JointModel:
         w = np.empty(data.n_residuals)
         for ch, s in sl.items():
             w[s] = 1.0 / data.noise[ch].std
-        self.weight = w
+        self.weight = np.where(data.used(), w, 0.0)  # masked samples: residual 0
         meas = [data.meas[k] for k in data.startup_channels()]
         if data.stop_t is not None:
             meas.append(data.stop_speed)

@@ -222,16 +222,23 @@ class SetFit:
         self.model = model
         self.xs = xs
         n = model.data.n_residuals
-        self.held = np.empty(n)
+        # residuals the conditioning masked are in neither fold: 0 here, and left out of chi^2
+        self.used = masks["A"] | masks["B"]
+        self.held = np.zeros(n)
         self.ssr_in = 0.0
-        r_in = np.empty(n)
+        r_in = np.zeros(n)
         for f, other in (("A", "B"), ("B", "A")):
             r = model.residuals(xs[f][None, :])[0]
             self.held[masks[other]] = r[masks[other]]
             r_in[masks[f]] = r[masks[f]]
             self.ssr_in += float(np.sum(r[masks[f]] ** 2))
         self.r_in = r_in
-        self.chi2 = float(np.mean(self.held**2))
+        self.chi2 = float(np.mean(self.held[self.used] ** 2))
+
+    @property
+    def held_used(self) -> np.ndarray:
+        """The held-out residuals of the samples in a fold (the masked ones left out)."""
+        return self.held[self.used]
 
     @property
     def names(self) -> list[str]:
@@ -309,7 +316,7 @@ def forward_selection(data, settings, ctx, centre, fc_scale, candidates, base_fi
                 progress(" + ".join([e.name for e in chosen] + [eff.name]))
             trials.append((eff, fit_set(data, settings, ctx, centre, fc_scale, chosen + [eff], cur, masks)))
         excess = cur.chi2 - 1.0
-        n_eff = effective_samples(data, cur.r_in)
+        n_eff = effective_samples(data, cur.r_in, cur.used)
         rows = []
         for eff, sf in trials:
             k = len(eff.extra_names)
@@ -377,7 +384,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         return misfit_ratio(held, unit_noise(noise_all.rel_uncertainty, noise_all.n_effective),
                             k=settings.band_k, bias_floor=settings.band_floor)
 
-    q_before = quality(base_fit.held)
+    q_before = quality(base_fit.held_used)
     facts = data.facts(settings.base_case)
     candidates, excluded = screen(effects, facts)
     if q_before.ratio > q_before.threshold:
@@ -385,7 +392,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
                                           q_before.threshold, progress)
     else:
         final, rounds = base_fit, []
-    q_after = quality(final.held)
+    q_after = quality(final.held_used)
     chosen = final.names
     status, verdict, share = verdict_of(settings, q_before, q_after, chosen)
 
