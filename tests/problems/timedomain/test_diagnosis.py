@@ -155,7 +155,8 @@ def out(tmp_path_factory):
 def _check_contract(doc):
     assert doc["status"] in STATUSES
     assert {"status", "verdict", "effects", "explained_share", "per_effect", "gap_before", "gap_after",
-            "indistinguishable", "excluded", "localisation", "wall_time_s"} <= set(doc)
+            "indistinguishable", "excluded", "pruned", "localisation", "wall_time_s"} <= set(doc)
+    assert not set(doc["pruned"]) & set(doc["effects"])
     assert doc["verdict"] == ("+".join(doc["effects"]) if doc["effects"] else
                               ("none" if doc["status"] == "no_gap" else "unexplained"))
     if doc["verdict"] == "none":  # never "none" over a visible gap

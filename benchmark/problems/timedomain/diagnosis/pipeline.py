@@ -13,7 +13,9 @@
    need ``dc_link_voltage`` or ``input_hold: zoh``...).
 5. Forward selection on the held-out folds (:func:`forward_selection`): add the candidate
    with the largest held-out reduction, refit base + all chosen effects jointly, repeat
-   while the next one earns its parameters.
+   while the next one earns its parameters; then the backward check (:func:`prune`): every
+   chosen effect must still earn the band part of that rule beside the others, else the
+   weakest is dropped (``pruned``) and the check repeats.
 6. Verdict (:func:`verdict_of`) with the statuses below, each chosen effect's drop-one
    share, fitted parameters and standard errors, candidates that leave the same signature,
    and where in time the excess lies.
@@ -345,6 +347,30 @@ def forward_selection(data, settings, ctx, centre, fc_scale, candidates, base_fi
     return cur, rounds
 
 
+def prune(data, settings, ctx, centre, fc_scale, final: SetFit, base_fit: SetFit, masks, band: float):
+    """Backward check of the chosen set: every effect must still earn its place in the final
+    model, by the band part of the rule it was chosen by (dropping it, base and the others
+    refitted, must raise the held-out chi^2 by at least ``min_band_drop`` of the noise band).
+    An effect chosen late for a sliver of a small remaining excess, which the effects chosen
+    with it make redundant, is dropped (the weakest first, then the check again).
+
+    Returns (final fit, each kept effect's drop-one fit, names of the effects dropped)."""
+    need = settings.min_band_drop * (band**2 - 1.0)
+    pruned = []
+    while True:
+        effects = final.model.effects
+        if len(effects) <= 1:
+            return final, [base_fit] * len(effects), pruned
+        withouts = [fit_set(data, settings, ctx, centre, fc_scale, [e for e in effects if e is not eff], final,
+                            masks, drop=j) for j, eff in enumerate(effects)]
+        rise = [w.chi2 - final.chi2 for w in withouts]
+        j = int(np.argmin(rise))
+        if rise[j] >= need:
+            return final, withouts, pruned
+        pruned.append(effects[j].name)
+        final = withouts[j]
+
+
 def verdict_of(settings: DiagnosisSettings, before, after, effects: list[str]) -> tuple[str, str, float]:
     """(status, verdict, explained share) from the held-out fit qualities before/after."""
     excess = before.ratio**2 - 1.0
@@ -392,6 +418,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
                                           q_before.threshold, progress)
     else:
         final, rounds = base_fit, []
+    final, withouts, pruned = prune(data, settings, ctx, centre, fc_scale, final, base_fit, masks,
+                                    q_before.threshold)
     q_after = quality(final.held_used)
     chosen = final.names
     status, verdict, share = verdict_of(settings, q_before, q_after, chosen)
@@ -402,11 +430,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.fit_iterations) if chosen else None
     se = final.model.standard_errors(full_x) if chosen else None
     for j, name in enumerate(chosen):
-        if len(chosen) == 1:
-            without = base_fit
-        else:
-            rest = [e for e in final.model.effects if e.name != name]
-            without = fit_set(data, settings, ctx, centre, fc_scale, rest, final, masks, drop=j)
+        without = withouts[j]
         own = (without.chi2 - final.chi2) / excess if excess > 0 else 0.0
         s = final.model.slices[j]
         per_effect.append({
@@ -433,6 +457,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "indistinguishable": indist,
         "excluded": excluded,
         "weak_effects": weak,
+        "pruned": pruned,
         "gap_before": {"heldout_rms_over_noise": q_before.ratio, "heldout_chi2_per_residual": q_before.ratio**2,
                        "noise_band": [q_before.lower, q_before.threshold], "at_noise_level": q_before.at_noise_level},
         "gap_after": {"heldout_rms_over_noise": q_after.ratio, "heldout_chi2_per_residual": q_after.ratio**2,

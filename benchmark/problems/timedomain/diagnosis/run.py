@@ -110,6 +110,9 @@ def render_markdown(doc: dict) -> str:
         lines.append("")
     for group in doc["indistinguishable"]:
         lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")
+    if doc.get("pruned"):
+        lines.append("Chosen, then dropped (no longer earning its place beside the others): "
+                     + ", ".join(doc["pruned"]) + ".")
     if doc.get("weak_effects"):
         lines.append(f"Best candidates, removing too little to explain the gap: {', '.join(doc['weak_effects'])}.")
     for ex in doc["excluded"]:
