@@ -346,7 +346,7 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     ident = polish_and_keep_better(problem, result, budgeted,
                                    int(cfg.polish_budget) if cfg.get("polish") else None)
     history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
-    nuisance = refine_nuisance(problem, x_best, f_best) if f_best is not None and np.isfinite(f_best) else None
+    nuisance = refine_nuisance(problem, x_best, f_best)
     if nuisance is not None and nuisance.accepted:
         x_best, f_best = nuisance.x, nuisance.cost
     wall = time.perf_counter() - t_start

@@ -92,8 +92,8 @@ def refine_nuisance(problem, x, cost: float) -> NuisanceRefinement | None:
 
     Kept (and the nuisance set on the problem) when the problem's own cost of the joint fit is
     below ``cost``, the cost at ``x`` with nuisance 0; else the problem is left at nuisance 0.
-    None when the problem has no nuisance or ``x`` is None."""
-    if x is None or not has_nuisance(problem):
+    None when the problem has no nuisance, or there is no finite point to start from."""
+    if x is None or cost is None or not np.isfinite(cost) or not has_nuisance(problem):
         return None
     view = JointView(problem)
     count = [0]

@@ -15,8 +15,6 @@ import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-import numpy as np
-
 from benchmark.core.effects import load_effects
 from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
@@ -53,7 +51,7 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     if ident.x is None:
         raise ConfigError(f"optimizer: the base identification failed ({ident.result.message})")
     x = ident.x
-    refined = refine_nuisance(problem, x, ident.cost) if np.isfinite(ident.cost) else None
+    refined = refine_nuisance(problem, x, ident.cost)
     if refined is not None and refined.accepted:
         x = refined.x
     est = problem.estimate(x)
