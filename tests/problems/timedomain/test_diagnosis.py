@@ -298,3 +298,33 @@ def test_samples_the_conditioning_masked_weigh_nothing_in_the_diagnosis(paper_re
     assert np.sqrt(np.mean(r[used] ** 2)) < 0.05  # the true model fits what is left (noise-free record)
     fit = SetFit(model, {"A": x, "B": x}, {"A": a, "B": b})
     assert fit.held_used.size == used.sum() and fit.chi2 == pytest.approx(np.mean(r[used] ** 2))
+
+
+def test_a_short_free_stop_is_shared_by_both_folds(paper_records):
+    """A load that brakes the shaft stops it within a fraction of a second: the stop's fold
+    blocks shrink to a quarter of the coast-down, so both folds hold two blocks of it (with the
+    fixed one-second blocks a stop under a second fell into fold A whole, and fold B's fit,
+    without the friction it measures, predicted it 100 times worse than the noise). The paper's
+    ten-second stop keeps one-second blocks."""
+    from benchmark.problems.timedomain.data import StartupDataset, StartupRecord, StopRecord
+    from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData
+
+    s = paper_records["startup"]
+    rec = StartupRecord(t=s["t"], v_alpha=s["v_alpha"], v_beta=s["v_beta"], i_alpha=s["i_alpha"],
+                        i_beta=s["i_beta"], speed=s["speed"])
+    t = np.arange(0.0, 1.0, 1e-3)
+    w0 = float(s["speed"][-1])
+    fast = StopRecord(t=t, speed=np.where(t < 0.6, w0 * (1.0 - t / 0.6) ** 2, 0.0))
+    data = DiagnosisData.from_dataset(StartupDataset(pole_pairs=1, sample_time=1 / 12000, startups=[rec],
+                                                     stops=[fast], input_hold="zoh"))
+    n_stop = len(data.stop_t)
+    assert 0.5 < data.stop_t[-1] < 0.6 and data.stop_block() == pytest.approx(data.stop_t[-1] / 4, rel=0.01)
+    a, b = data.folds()
+    stop_a, stop_b = a[-n_stop:], b[-n_stop:]
+    assert 0.4 < stop_a.mean() < 0.6 and 0.4 < stop_b.mean() < 0.6
+    assert np.count_nonzero(np.diff(stop_a.astype(int))) >= 3  # A, B, A, B: two blocks each
+    st = paper_records["stop"]
+    slow = DiagnosisData.from_dataset(StartupDataset(pole_pairs=1, sample_time=1 / 12000, startups=[rec],
+                                                     stops=[StopRecord(t=st["t"], speed=st["speed"])],
+                                                     input_hold="zoh"))
+    assert slow.stop_t[-1] > 4.0 and slow.stop_block() == 1.0

@@ -150,17 +150,31 @@ class DiagnosisData:
         return np.concatenate(parts)
 
     def folds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Two interleaved folds of blocks (two supply periods of the start-up, one second of
-        the stop): each fold is a held-out set for a fit on the other. Masked samples are in
-        neither."""
+        """Two interleaved folds of blocks (two supply periods of the start-up; of the stop,
+        a quarter of the time the shaft takes to stop, at most one second): each fold is a
+        held-out set for a fit on the other. Masked samples are in neither. A stop shorter than
+        one block would fall into one fold whole and leave the other fold's fit without the
+        friction it measures (a load that brakes the shaft stops it in a fraction of a second)."""
         block = 2.0 / self.supply_frequency
         kA = (np.floor((self.t - self.t[0]) / block).astype(int) % 2) == 0
         parts = [kA] * len(self.startup_channels())
         if self.stop_t is not None:
-            parts.append((np.floor(self.stop_t / 1.0).astype(int) % 2) == 0)
+            parts.append((np.floor(self.stop_t / self.stop_block()).astype(int) % 2) == 0)
         a = np.concatenate(parts)
         used = self.used()
         return a & used, ~a & used
+
+    def stop_block(self) -> float:
+        """Length of the stop's fold blocks (s): a quarter of the time until the measured speed
+        first falls below 2 % of its value at the supply's removal (the record's end when it
+        never does), so that each fold holds at least two blocks of the coast-down; at most 1 s,
+        at least two samples."""
+        t, w = self.stop_t, self.stop_speed
+        w0 = abs(float(self.stop_w0)) if self.stop_w0 else float(np.max(np.abs(w)))
+        below = np.flatnonzero(np.abs(w) < 0.02 * w0)
+        t_stop = float(t[below[0]]) if len(below) else float(t[-1])
+        dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
+        return float(np.clip(t_stop / 4.0, 2.0 * dt, 1.0))
 
     def facts(self, base_case: int) -> dict:
         """What the experiment says about itself: which effects can occur in it."""
