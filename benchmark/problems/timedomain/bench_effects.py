@@ -327,9 +327,9 @@ class LoadTorque(Effect):
         starts = [np.array([0.1, 0.1, 0.0, 0.5]), np.array([0.0, 0.0, 0.2, 0.35]), np.array([0.0, 0.0, 0.2, 0.65]),
                   np.array([0.0, 0.0, 0.2, 0.85])]
         change = ctx.load_change
-        if change is not None:  # a step where the current envelope jumps, tried right after the first
+        if change is not None:  # a step where the current envelope jumps: the first start (the screening's)
             lo, hi = self.extra_bounds(ctx)
-            starts.insert(1, np.array([0.0, 0.0, 0.2, float(np.clip(change / ctx.record_duration, lo[3], hi[3]))]))
+            starts.insert(0, np.array([0.0, 0.0, 0.2, float(np.clip(change / ctx.record_duration, lo[3], hi[3]))]))
         return starts
 
     def augment(self, rows, extras, ctx):

@@ -187,7 +187,7 @@ class JointModel:
     """Base model (+ a list of effects) with the joint residual of :class:`DiagnosisData`."""
 
     def __init__(self, data: DiagnosisData, base_case: int, effects: list[Effect] | tuple, ctx: EffectContext,
-                 centre: dict[str, float], fc_scale: float):
+                 centre: dict[str, float], fc_scale: float, span: float = 2.0):
         self.data = data
         self.effects = list(effects)
         self.ctx = ctx
@@ -206,7 +206,7 @@ class JointModel:
             k += m
         self.names = self.base_names + tuple(extra)
         c = np.array([centre[n] for n in self.base_names])
-        lo, hi = 0.5 * c, 2.0 * c
+        lo, hi = c / span, c * span  # the box the local fits search around the base estimate
         for j, n in enumerate(self.base_names):
             if n == "fv":
                 lo[j], hi[j] = 0.1 * c[j], 5.0 * c[j] + 1e-9

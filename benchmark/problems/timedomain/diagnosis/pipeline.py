@@ -11,9 +11,11 @@
    fold predicted by the fit on the other) is the gap.
 4. Screen the candidates by the experiment's facts (``Effect.applies_to``; inverter effects
    need ``dc_link_voltage`` or ``input_hold: zoh``...).
-5. Forward selection on the held-out folds (:func:`forward_selection`): add the candidate
+5. Forward selection on the held-out folds (:mod:`.selection`): add the candidate
    with the largest held-out reduction, refit base + all chosen effects jointly, repeat
-   while the next one earns its parameters; then the backward check (:func:`prune`): every
+   while the next one earns its parameters; when none does and the gap left is far above the
+   noise, a pair look-ahead (two effects that mask each other enter together when they earn
+   together); then the backward check (``Selector.prune``): every
    chosen effect must still earn the band part of that rule beside the others, else the
    weakest is dropped (``pruned``) and the check repeats.
 6. Verdict (:func:`verdict_of`) with the statuses below, each chosen effect's drop-one
@@ -49,17 +51,19 @@ which reads only ``meta.yaml`` and the record tables.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from benchmark.core.effects import Effect, effect_context
-from benchmark.core.uncertainty import ar1_coefficient, misfit_ratio
+from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_noise
 from benchmark.problems.timedomain.diagnosis.noise import combined
+from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
+
+__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "localise", "screen", "verdict_of"]
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
 HARMONIC_ORDERS = (-11, -7, -5, -1, 1, 5, 7, 11, 13)
@@ -87,6 +91,15 @@ class DiagnosisSettings:
         ``screen_keep``, each is first fitted cheaply with the chosen ones (fold A,
         ``screen_iterations``, scored on fold B) and only the best ``screen_keep`` are fitted fully.
     band_k, band_floor : ``misfit_ratio``'s k and bias floor.
+    pair_keep : when no single candidate earns and the gap left is more than twice the band,
+        every pair of candidates is screened and the best ``pair_keep`` pairs are fitted fully
+        (:mod:`.selection`); 0 turns the pair look-ahead off.
+    final_iterations : trust-region iterations of the final model's fit on all the data (the
+        reported parameters and standard errors); the fold fits of the selection stop earlier.
+    base_span : the local fits search the base model's electrical and inertia parameters in
+        ``[c / base_span, c base_span]`` about the base identification ``c``: an identification
+        pulled far off by the unmodelled effects (a stator resistance three times its DC value)
+        must stay inside the box, or the augmented model can never return to the motor.
     """
 
     base_case: int = 2
@@ -94,13 +107,16 @@ class DiagnosisSettings:
     min_band_drop: float = 0.5
     explained_share: float = 0.9
     partly_share: float = 0.3
-    max_effects: int = 3
+    max_effects: int = 4
     indistinguishable_margin: float = 0.03
     fit_iterations: int = 12
     screen_keep: int = 6
     screen_iterations: int = 6
     band_k: float = 2.0
     band_floor: float = 0.05
+    base_span: float = 5.0
+    pair_keep: int = 2
+    final_iterations: int = 60
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
@@ -205,172 +221,6 @@ def localise(data: DiagnosisData, r: np.ndarray, band_hi: float) -> dict:
             "stop_record": stop, "summary": text}
 
 
-def effective_samples(data: DiagnosisData, r: np.ndarray, mask: np.ndarray | None = None) -> float:
-    """Effective number of independent residuals: ``n (1 - phi)/(1 + phi)`` per channel."""
-    total = 0.0
-    for s in data.channel_slices().values():
-        x = r[s] if mask is None else r[s][mask[s]]
-        if len(x) < 3:
-            continue
-        phi = ar1_coefficient(x - x.mean())
-        total += len(x) * (1 - phi) / (1 + phi)
-    return max(total, 2.0)
-
-
-class SetFit:
-    """Fold fits of the base plus one set of effects, and their held-out residual."""
-
-    def __init__(self, model: JointModel, xs: dict, masks: dict):
-        self.model = model
-        self.xs = xs
-        n = model.data.n_residuals
-        # residuals the conditioning masked are in neither fold: 0 here, and left out of chi^2
-        self.used = masks["A"] | masks["B"]
-        self.held = np.zeros(n)
-        self.ssr_in = 0.0
-        r_in = np.zeros(n)
-        for f, other in (("A", "B"), ("B", "A")):
-            r = model.residuals(xs[f][None, :])[0]
-            self.held[masks[other]] = r[masks[other]]
-            r_in[masks[f]] = r[masks[f]]
-            self.ssr_in += float(np.sum(r[masks[f]] ** 2))
-        self.r_in = r_in
-        self.chi2 = float(np.mean(self.held[self.used] ** 2))
-
-    @property
-    def held_used(self) -> np.ndarray:
-        """The held-out residuals of the samples in a fold (the masked ones left out)."""
-        return self.held[self.used]
-
-    @property
-    def names(self) -> list[str]:
-        return self.model.effect_names
-
-
-def fit_set(data, settings, ctx, centre, fc_scale, effects, starts_from: SetFit, masks, drop: int | None = None):
-    """Fit base + ``effects`` on each fold, from ``starts_from``'s fold fits (plus the new
-    effect's starting values when one is added, or minus effect ``drop``'s parameters)."""
-    model = JointModel(data, settings.base_case, effects, ctx, centre, fc_scale)
-    prev = starts_from.model
-    xs = {}
-    for f in ("A", "B"):
-        x_prev = starts_from.xs[f]
-        if drop is not None:
-            keep = np.ones(len(x_prev), bool)
-            keep[prev.slices[drop]] = False
-            starts = [x_prev[keep]]
-        elif len(effects) > len(prev.effects):
-            new = effects[-1]
-            starts = [np.concatenate([x_prev, s]) for s in new.extra_starts(ctx)]
-        else:
-            starts = [x_prev]
-        best, best_ssr = None, np.inf
-        for x0 in starts:
-            x = model.fit(x0, masks[f], settings.fit_iterations)
-            s = model.ssr(x, masks[f])
-            if s < best_ssr:
-                best, best_ssr = x, s
-        xs[f] = best
-    return SetFit(model, xs, masks)
-
-
-def prescreen(data, settings, ctx, centre, fc_scale, chosen, candidates, cur: SetFit, masks, progress=None):
-    """A cheap look at every remaining candidate: base + the chosen effects + it, fitted on
-    fold A only (its first starting values, ``screen_iterations``), scored on fold B. Returns
-    the candidates ordered by that held-out chi^2 and the table."""
-    rows = []
-    held_cur = float(np.mean(cur.model.residuals(cur.xs["A"][None, :])[0][masks["B"]] ** 2))
-    for eff in candidates:
-        if progress:
-            progress("screening " + " + ".join([e.name for e in chosen] + [eff.name]))
-        model = JointModel(data, settings.base_case, chosen + [eff], ctx, centre, fc_scale)
-        x0 = np.concatenate([cur.xs["A"], eff.extra_starts(ctx)[0]])
-        x = model.fit(x0, masks["A"], settings.screen_iterations)
-        chi2 = float(np.mean(model.residuals(x[None, :])[0][masks["B"]] ** 2))
-        rows.append({"effect": eff.name, "heldout_chi2_fold_B": chi2, "heldout_chi2_base_fold_B": held_cur})
-    order = np.argsort([r["heldout_chi2_fold_B"] for r in rows])
-    return [candidates[i] for i in order], [rows[i] for i in order]
-
-
-def forward_selection(data, settings, ctx, centre, fc_scale, candidates, base_fit: SetFit, masks, band,
-                      progress=None):
-    """Greedy forward selection on the held-out folds; returns (chosen SetFit, rounds).
-
-    Every round starts from all remaining candidates: with more than ``screen_keep`` of them, a
-    cheap screening from the current set keeps the best ``screen_keep`` (so an effect masked by
-    another one in the first round is looked at again once that one is in the model)."""
-    cur = base_fit
-    chosen: list[Effect] = []
-    rounds = []
-    band_chi2 = band**2 - 1.0
-    while len(chosen) < settings.max_effects:
-        pool = [e for e in candidates if e not in chosen]
-        if not pool or cur.chi2 <= band**2:
-            break
-        if len(pool) > settings.screen_keep:
-            pool, screened = prescreen(data, settings, ctx, centre, fc_scale, chosen, pool, cur, masks, progress)
-            pool = pool[:settings.screen_keep]
-            rounds.append({"round": 0, "from": [e.name for e in chosen], "screening": screened,
-                           "kept": [e.name for e in pool]})
-        trials = []
-        for eff in pool:
-            if progress:
-                progress(" + ".join([e.name for e in chosen] + [eff.name]))
-            trials.append((eff, fit_set(data, settings, ctx, centre, fc_scale, chosen + [eff], cur, masks)))
-        excess = cur.chi2 - 1.0
-        n_eff = effective_samples(data, cur.r_in, cur.used)
-        rows = []
-        for eff, sf in trials:
-            k = len(eff.extra_names)
-            crit = n_eff * math.log(max(sf.ssr_in, 1e-300) / max(cur.ssr_in, 1e-300)) + k * math.log(n_eff)
-            red = (cur.chi2 - sf.chi2) / excess if excess > 0 else 0.0
-            rows.append({"effect": eff.name, "heldout_chi2": sf.chi2, "excess_reduction": float(red),
-                         "heldout_reduction": float(1 - sf.chi2 / cur.chi2), "criterion": float(crit),
-                         "earns": bool(red >= settings.min_excess_reduction
-                                       and cur.chi2 - sf.chi2 >= settings.min_band_drop * band_chi2
-                                       and crit < 0)})
-        order = np.argsort([r["heldout_chi2"] for r in rows])
-        rows = [rows[i] for i in order]
-        trials = [trials[i] for i in order]
-        best_row, (best_eff, best_sf) = rows[0], trials[0]
-        rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
-               "heldout_chi2_from": cur.chi2, "effective_samples": n_eff, "candidates": rows, "chosen": None,
-               "indistinguishable": []}
-        rounds.append(rnd)
-        if not best_row["earns"]:
-            break
-        rnd["chosen"] = best_eff.name
-        rnd["indistinguishable"] = [r["effect"] for r in rows[1:] if r["earns"] and best_row["excess_reduction"]
-                                    - r["excess_reduction"] <= settings.indistinguishable_margin]
-        chosen.append(best_eff)
-        cur = best_sf
-    return cur, rounds
-
-
-def prune(data, settings, ctx, centre, fc_scale, final: SetFit, base_fit: SetFit, masks, band: float):
-    """Backward check of the chosen set: every effect must still earn its place in the final
-    model, by the band part of the rule it was chosen by (dropping it, base and the others
-    refitted, must raise the held-out chi^2 by at least ``min_band_drop`` of the noise band).
-    An effect chosen late for a sliver of a small remaining excess, which the effects chosen
-    with it make redundant, is dropped (the weakest first, then the check again).
-
-    Returns (final fit, each kept effect's drop-one fit, names of the effects dropped)."""
-    need = settings.min_band_drop * (band**2 - 1.0)
-    pruned = []
-    while True:
-        effects = final.model.effects
-        if len(effects) <= 1:
-            return final, [base_fit] * len(effects), pruned
-        withouts = [fit_set(data, settings, ctx, centre, fc_scale, [e for e in effects if e is not eff], final,
-                            masks, drop=j) for j, eff in enumerate(effects)]
-        rise = [w.chi2 - final.chi2 for w in withouts]
-        j = int(np.argmin(rise))
-        if rise[j] >= need:
-            return final, withouts, pruned
-        pruned.append(effects[j].name)
-        final = withouts[j]
-
-
 def verdict_of(settings: DiagnosisSettings, before, after, effects: list[str]) -> tuple[str, str, float]:
     """(status, verdict, explained share) from the held-out fit qualities before/after."""
     excess = before.ratio**2 - 1.0
@@ -398,7 +248,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     fc_scale = 0.3 * base_estimate["fv"] * ctx.w_sync + 1e-9
     centre = dict(base_estimate)
 
-    base = JointModel(data, settings.base_case, [], ctx, centre, fc_scale)
+    sel = Selector(data, settings, ctx, centre, fc_scale, masks)
+    base = sel.model([])
     x0 = np.array([centre[n] for n in base.base_names])
     base_full = base.fit(x0, None, 2 * settings.fit_iterations)
     base_fit = SetFit(base, {"A": base.fit(base_full, fold_a, settings.fit_iterations),
@@ -414,12 +265,10 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     facts = data.facts(settings.base_case)
     candidates, excluded = screen(effects, facts)
     if q_before.ratio > q_before.threshold:
-        final, rounds = forward_selection(data, settings, ctx, centre, fc_scale, candidates, base_fit, masks,
-                                          q_before.threshold, progress)
+        final, rounds = sel.forward_selection(candidates, base_fit, q_before.threshold, progress)
     else:
         final, rounds = base_fit, []
-    final, withouts, pruned = prune(data, settings, ctx, centre, fc_scale, final, base_fit, masks,
-                                    q_before.threshold)
+    final, withouts, pruned = sel.prune(final, base_fit, q_before.threshold)
     q_after = quality(final.held_used)
     chosen = final.names
     status, verdict, share = verdict_of(settings, q_before, q_after, chosen)
@@ -427,7 +276,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     # each chosen effect's own share (drop-one) and its parameters with standard errors
     per_effect = []
     excess = q_before.ratio**2 - 1.0
-    full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.fit_iterations) if chosen else None
+    full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.final_iterations) if chosen else None
     se = final.model.standard_errors(full_x) if chosen else None
     for j, name in enumerate(chosen):
         without = withouts[j]

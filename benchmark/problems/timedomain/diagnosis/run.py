@@ -129,6 +129,16 @@ def render_markdown(doc: dict) -> str:
         lines += [f"| {k + 1} | {w['start_s']:.4g} | {w['end_s']:.4g} | {100 * w['excess_share']:.0f} % |"
                   for k, w in enumerate(loc["excess_windows"])]
     for rnd in doc["selection"]:
+        if rnd.get("pairs"):
+            lines += ["", f"## Pair look-ahead from base{''.join(' + ' + e for e in rnd['from'])} (no single "
+                          "candidate earns; each pair fitted on fold A, scored on fold B, the best fitted fully)", "",
+                      "| pair | held-out chi^2 (fold B) |", "|---|---|"]
+            lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} |" for r in rnd["screening"][:8]]
+            lines += ["", "| pair | held-out chi^2 | share of the excess removed | criterion | earns |",
+                      "|---|---|---|---|---|"]
+            lines += [f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
+                      f"| {r['criterion']:.1f} | {'yes' if r['earns'] else 'no'} |" for r in rnd["candidates"]]
+            continue
         if "screening" in rnd:
             lines += ["", f"## Screening from base{''.join(' + ' + e for e in rnd['from'])} "
                           "(each candidate fitted on fold A, scored on fold B)", "",

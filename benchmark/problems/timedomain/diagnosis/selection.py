@@ -1,0 +1,267 @@
+"""Choosing the effects: fold fits of effect sets, forward selection with a pair look-ahead,
+and the backward check (steps 5 of :mod:`.pipeline`).
+
+A candidate (or a pair of candidates) *earns* its place by the rule of the pipeline's module
+docstring: it removes at least ``min_excess_reduction`` of the current excess held-out misfit,
+that drop exceeds ``min_band_drop`` of the noise band, and the information criterion
+``n_eff ln(SSR_new / SSR_old) + k ln n_eff`` is negative.
+
+Pair look-ahead: two effects can mask each other, so that neither fitted alone removes much
+and both together remove most of the gap (a load step and a tachometer's gain error: the
+speed misfit of either is the other's signature). When no single candidate earns and what is
+left is still far above the noise (more than twice the band: a gap the verdict could not call
+explained), every pair of the remaining candidates is screened (fitted together on fold A,
+scored on fold B) and the best ``pair_keep`` are fitted on both folds. A pair earns when, with
+``k`` the parameters of both, it removes at least twice ``min_excess_reduction`` of the excess,
+at least ``min_excess_reduction`` more than the round's best single candidate (the second
+effect is no hitchhiker), and passes the band and criterion parts. Both then enter the model,
+the one that removed more alone first.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from benchmark.core.effects import Effect
+from benchmark.core.uncertainty import ar1_coefficient
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
+
+
+def effective_samples(data: DiagnosisData, r: np.ndarray, mask: np.ndarray | None = None) -> float:
+    """Effective number of independent residuals: ``n (1 - phi)/(1 + phi)`` per channel."""
+    total = 0.0
+    for s in data.channel_slices().values():
+        x = r[s] if mask is None else r[s][mask[s]]
+        if len(x) < 3:
+            continue
+        phi = ar1_coefficient(x - x.mean())
+        total += len(x) * (1 - phi) / (1 + phi)
+    return max(total, 2.0)
+
+
+class SetFit:
+    """Fold fits of the base plus one set of effects, and their held-out residual."""
+
+    def __init__(self, model: JointModel, xs: dict, masks: dict):
+        self.model = model
+        self.xs = xs
+        n = model.data.n_residuals
+        # residuals the conditioning masked are in neither fold: 0 here, and left out of chi^2
+        self.used = masks["A"] | masks["B"]
+        self.held = np.zeros(n)
+        self.ssr_in = 0.0
+        r_in = np.zeros(n)
+        for f, other in (("A", "B"), ("B", "A")):
+            r = model.residuals(xs[f][None, :])[0]
+            self.held[masks[other]] = r[masks[other]]
+            r_in[masks[f]] = r[masks[f]]
+            self.ssr_in += float(np.sum(r[masks[f]] ** 2))
+        self.r_in = r_in
+        self.chi2 = float(np.mean(self.held[self.used] ** 2))
+
+    @property
+    def held_used(self) -> np.ndarray:
+        """The held-out residuals of the samples in a fold (the masked ones left out)."""
+        return self.held[self.used]
+
+    @property
+    def names(self) -> list[str]:
+        return self.model.effect_names
+
+
+class Selector:
+    """The fits the selection needs, on one data set: the base and effect sets on two folds."""
+
+    def __init__(self, data, settings, ctx, centre, fc_scale, masks):
+        self.data, self.settings, self.ctx = data, settings, ctx
+        self.centre, self.fc_scale, self.masks = centre, fc_scale, masks
+
+    def model(self, effects) -> JointModel:
+        return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
+                          self.settings.base_span)
+
+    def fit_set(self, effects, starts_from: SetFit, drop: int | None = None) -> SetFit:
+        """Fit base + ``effects`` on each fold, from ``starts_from``'s fold fits plus the new
+        effects' starting values (every start of the last new one, the first of the others), or
+        minus effect ``drop``'s parameters."""
+        model = self.model(effects)
+        prev = starts_from.model
+        new = list(effects)[len(prev.effects):]
+        xs = {}
+        for f in ("A", "B"):
+            x_prev = starts_from.xs[f]
+            if drop is not None:
+                keep = np.ones(len(x_prev), bool)
+                keep[prev.slices[drop]] = False
+                starts = [x_prev[keep]]
+            elif new:
+                head = [e.extra_starts(self.ctx)[0] for e in new[:-1]]
+                starts = [np.concatenate([x_prev, *head, s]) for s in new[-1].extra_starts(self.ctx)]
+            else:
+                starts = [x_prev]
+            best, best_ssr = None, np.inf
+            for x0 in starts:
+                x = model.fit(x0, self.masks[f], self.settings.fit_iterations)
+                s = model.ssr(x, self.masks[f])
+                if s < best_ssr:
+                    best, best_ssr = x, s
+            if new:
+                best = self.converge(model, best, self.masks[f], self.settings.fit_iterations,
+                                     prev.ssr(x_prev, self.masks[f]))
+            xs[f] = best
+        return SetFit(model, xs, self.masks)
+
+    @staticmethod
+    def converge(model: JointModel, x: np.ndarray, mask, iterations: int, ssr_without: float) -> np.ndarray:
+        """Fit on from ``x`` while it fits ``mask`` worse than the model without the new
+        effects did (``ssr_without``): a nested model that does worse has not converged (its
+        start was far off, e.g. a guessed load torque where the record has another), and
+        judging it there would rank a right candidate last. At most four more rounds of
+        ``iterations``."""
+        for _ in range(4):
+            if model.ssr(x, mask) <= ssr_without:
+                break
+            x = model.fit(x, mask, iterations)
+        return x
+
+    def prescreen(self, chosen, additions, cur: SetFit, progress=None):
+        """A cheap look at each addition (a tuple of effects): base + the chosen effects + it,
+        fitted on fold A only (first starting values, ``screen_iterations``), scored on fold B.
+        Returns the additions ordered by that held-out chi^2 and the table."""
+        rows = []
+        masks = self.masks
+        held_cur = float(np.mean(cur.model.residuals(cur.xs["A"][None, :])[0][masks["B"]] ** 2))
+        ssr_cur = cur.model.ssr(cur.xs["A"], masks["A"])
+        for add in additions:
+            if progress:
+                progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
+            model = self.model(list(chosen) + list(add))
+            x0 = np.concatenate([cur.xs["A"]] + [e.extra_starts(self.ctx)[0] for e in add])
+            x = model.fit(x0, masks["A"], self.settings.screen_iterations)
+            x = self.converge(model, x, masks["A"], self.settings.screen_iterations, ssr_cur)
+            chi2 = float(np.mean(model.residuals(x[None, :])[0][masks["B"]] ** 2))
+            rows.append({"effect": "+".join(e.name for e in add), "heldout_chi2_fold_B": chi2,
+                         "heldout_chi2_base_fold_B": held_cur})
+        order = np.argsort([r["heldout_chi2_fold_B"] for r in rows])
+        return [additions[i] for i in order], [rows[i] for i in order]
+
+    def score(self, name: str, k: int, sf: SetFit, cur: SetFit, n_eff: float, band: float, need: float) -> dict:
+        """The row of one trial, ``earns`` by the rule (``need``: share of the excess to remove)."""
+        st = self.settings
+        excess = cur.chi2 - 1.0
+        crit = n_eff * math.log(max(sf.ssr_in, 1e-300) / max(cur.ssr_in, 1e-300)) + k * math.log(n_eff)
+        red = (cur.chi2 - sf.chi2) / excess if excess > 0 else 0.0
+        return {"effect": name, "heldout_chi2": sf.chi2, "excess_reduction": float(red),
+                "heldout_reduction": float(1 - sf.chi2 / cur.chi2), "criterion": float(crit),
+                "earns": bool(red >= need and cur.chi2 - sf.chi2 >= st.min_band_drop * (band**2 - 1.0)
+                              and crit < 0)}
+
+    def forward_selection(self, candidates, base_fit: SetFit, band: float, progress=None):
+        """Greedy forward selection on the held-out folds, with the pair look-ahead of the
+        module docstring; returns (chosen SetFit, rounds).
+
+        Every round starts from all remaining candidates: with more than ``screen_keep`` of them, a
+        cheap screening from the current set keeps the best ``screen_keep`` (so an effect masked by
+        another one in the first round is looked at again once that one is in the model)."""
+        st = self.settings
+        cur = base_fit
+        chosen: list[Effect] = []
+        rounds = []
+        while len(chosen) < st.max_effects:
+            pool = [e for e in candidates if e not in chosen]
+            if not pool or cur.chi2 <= band**2:
+                break
+            if len(pool) > st.screen_keep:
+                kept, screened = self.prescreen(chosen, [(e,) for e in pool], cur, progress)
+                pool = [a[0] for a in kept[:st.screen_keep]]
+                rounds.append({"round": 0, "from": [e.name for e in chosen], "screening": screened,
+                               "kept": [e.name for e in pool]})
+            trials = []
+            for eff in pool:
+                if progress:
+                    progress(" + ".join([e.name for e in chosen] + [eff.name]))
+                trials.append((eff, self.fit_set(chosen + [eff], cur)))
+            n_eff = effective_samples(self.data, cur.r_in, cur.used)
+            rows = [self.score(eff.name, len(eff.extra_names), sf, cur, n_eff, band, st.min_excess_reduction)
+                    for eff, sf in trials]
+            order = np.argsort([r["heldout_chi2"] for r in rows])
+            rows = [rows[i] for i in order]
+            trials = [trials[i] for i in order]
+            best_row, (best_eff, best_sf) = rows[0], trials[0]
+            rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
+                   "heldout_chi2_from": cur.chi2, "effective_samples": n_eff, "candidates": rows, "chosen": None,
+                   "indistinguishable": []}
+            rounds.append(rnd)
+            if best_row["earns"]:
+                rnd["chosen"] = best_eff.name
+                rnd["indistinguishable"] = [r["effect"] for r in rows[1:] if r["earns"] and best_row["excess_reduction"]
+                                            - r["excess_reduction"] <= st.indistinguishable_margin]
+                chosen.append(best_eff)
+                cur = best_sf
+                continue
+            pair = self.pair_lookahead(chosen, candidates, cur, band, n_eff, rows, rounds, progress)
+            if pair is None:
+                break
+            chosen += pair[0]
+            cur = pair[1]
+        return cur, rounds
+
+    def pair_lookahead(self, chosen, candidates, cur: SetFit, band: float, n_eff: float, single_rows, rounds,
+                       progress=None):
+        """Two candidates that earn together (module docstring), or None. Appends its round."""
+        st = self.settings
+        far = math.sqrt(cur.chi2) - 1.0 > 2.0 * (band - 1.0)
+        pool = [e for e in candidates if e not in chosen]
+        if st.pair_keep <= 0 or not far or len(chosen) + 2 > st.max_effects or len(pool) < 2:
+            return None
+        alone = {r["effect"]: r["excess_reduction"] for r in single_rows}
+        pairs = list(itertools.combinations(pool, 2))
+        kept, screened = self.prescreen(chosen, pairs, cur, progress)
+        rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
+               "pairs": True, "screening": screened, "heldout_chi2_from": cur.chi2, "effective_samples": n_eff,
+               "candidates": [], "chosen": None, "indistinguishable": []}
+        rounds.append(rnd)
+        best_single = max([0.0] + list(alone.values()))
+        found = None
+        for a, b in kept[:st.pair_keep]:
+            if alone.get(b.name, -np.inf) > alone.get(a.name, -np.inf):
+                a, b = b, a  # the one that removed more alone enters first
+            if progress:
+                progress(" + ".join([e.name for e in chosen] + [a.name, b.name]))
+            sf = self.fit_set(chosen + [a, b], cur)
+            row = self.score(f"{a.name}+{b.name}", len(a.extra_names) + len(b.extra_names), sf, cur, n_eff, band,
+                             2.0 * st.min_excess_reduction)
+            row["earns"] = bool(row["earns"] and row["excess_reduction"] - best_single >= st.min_excess_reduction)
+            rnd["candidates"].append(row)
+            if row["earns"] and (found is None or sf.chi2 < found[1].chi2):
+                found = ([a, b], sf)
+        rnd["candidates"].sort(key=lambda r: r["heldout_chi2"])
+        if found is not None:
+            rnd["chosen"] = "+".join(e.name for e in found[0])
+        return found
+
+    def prune(self, final: SetFit, base_fit: SetFit, band: float):
+        """Backward check of the chosen set: every effect must still earn its place in the final
+        model, by the band part of the rule it was chosen by (dropping it, base and the others
+        refitted, must raise the held-out chi^2 by at least ``min_band_drop`` of the noise band).
+        An effect chosen late for a sliver of a small remaining excess, which the effects chosen
+        with it make redundant, is dropped (the weakest first, then the check again).
+
+        Returns (final fit, each kept effect's drop-one fit, names of the effects dropped)."""
+        need = self.settings.min_band_drop * (band**2 - 1.0)
+        pruned = []
+        while True:
+            effects = final.model.effects
+            if len(effects) <= 1:
+                return final, [base_fit] * len(effects), pruned
+            withouts = [self.fit_set([e for e in effects if e is not eff], final, drop=j)
+                        for j, eff in enumerate(effects)]
+            rise = [w.chi2 - final.chi2 for w in withouts]
+            j = int(np.argmin(rise))
+            if rise[j] >= need:
+                return final, withouts, pruned
+            pruned.append(effects[j].name)
+            final = withouts[j]
