@@ -88,12 +88,17 @@ def story_double_cage(figdir: Path, outdir: Path) -> list[str]:
     ds, _ = load_dataset(diagnosis_config)
     data = DiagnosisData.from_dataset(ds)
     ctx = base_context(data, doc["base"]["identification"], ds.dc_link_voltage)
-    base = JointModel(data, 2, None, ctx, doc["base"]["identification"])
+    centre = doc["base"]["identification"]
+    fc_scale = 0.3 * centre["fv"] * ctx.w_sync + 1e-9
+    base = JointModel(data, 2, [], ctx, centre, fc_scale)
     xb = np.array([doc["base"]["estimate"][n] for n in base.base_names])
     eff = load_effects("timedomain", ["double_cage"])["double_cage"]
-    aug = JointModel(data, 2, eff, ctx, doc["base"]["identification"])
+    aug = JointModel(data, 2, [eff], ctx, centre, fc_scale)
     top = next(r for r in doc["ranking"] if r["effect"] == "double_cage")
-    xa = aug.fit(np.concatenate([xb, list(top["extra_parameters"].values())]), None, 400)
+    chosen = next((pe for pe in doc["per_effect"] if pe["effect"] == "double_cage"), None)
+    starts = ([np.array([v["value"] for v in chosen["parameters"].values()])] if chosen
+              else eff.extra_starts(ctx))
+    xa = min((aug.fit(np.concatenate([xb, s]), None, 40) for s in starts), key=aug.ssr)
     n = data.n_startup
     sb = base.simulate(xb[None])[0][2 * n:3 * n]
     sa = aug.simulate(xa[None])[0][2 * n:3 * n]
