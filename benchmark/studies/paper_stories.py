@@ -83,13 +83,13 @@ def story_double_cage(figdir: Path, outdir: Path) -> list[str]:
     from benchmark.core.effects import load_effects
     from benchmark.core.harness import load_dataset
     from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
-    from benchmark.problems.timedomain.diagnosis.pipeline import base_context
+    from benchmark.problems.timedomain.diagnosis.pipeline import base_context, friction_scale
 
     ds, _ = load_dataset(diagnosis_config)
     data = DiagnosisData.from_dataset(ds)
     ctx = base_context(data, doc["base"]["identification"], ds.dc_link_voltage)
     centre = doc["base"]["identification"]
-    fc_scale = 0.3 * centre["fv"] * ctx.w_sync + 1e-9
+    fc_scale = friction_scale(centre, ctx)
     base = JointModel(data, 2, [], ctx, centre, fc_scale)
     xb = np.array([doc["base"]["estimate"][n] for n in base.base_names])
     eff = load_effects("timedomain", ["double_cage"])["double_cage"]

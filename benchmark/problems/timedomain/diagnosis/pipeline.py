@@ -63,7 +63,8 @@ from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_nois
 from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 
-__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "localise", "screen", "verdict_of"]
+__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "friction_scale", "localise",
+           "screen", "verdict_of"]
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
 HARMONIC_ORDERS = (-11, -7, -5, -1, 1, 5, 7, 11, 13)
@@ -117,6 +118,12 @@ class DiagnosisSettings:
     base_span: float = 5.0
     pair_keep: int = 2
     final_iterations: int = 60
+
+
+def friction_scale(estimate: dict[str, float], ctx) -> float:
+    """Scale of the Coulomb friction's search range (N m): 0.3 of the viscous torque at
+    synchronous speed (``fc`` is searched in ``[0, 5 fc + this]``)."""
+    return 0.3 * estimate["fv"] * ctx.w_sync + 1e-9
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
@@ -245,7 +252,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     ctx = base_context(data, base_estimate, ds.dc_link_voltage)
     fold_a, fold_b = data.folds()
     masks = {"A": fold_a, "B": fold_b}
-    fc_scale = 0.3 * base_estimate["fv"] * ctx.w_sync + 1e-9
+    fc_scale = friction_scale(base_estimate, ctx)
     centre = dict(base_estimate)
 
     sel = Selector(data, settings, ctx, centre, fc_scale, masks)

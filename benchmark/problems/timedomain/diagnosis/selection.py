@@ -52,13 +52,14 @@ class SetFit:
         # residuals the conditioning masked are in neither fold: 0 here, and left out of chi^2
         self.used = masks["A"] | masks["B"]
         self.held = np.zeros(n)
-        self.ssr_in = 0.0
+        self.ssr_fold = {}  # in-sample SSR of each fold's fit on its own fold
         r_in = np.zeros(n)
         for f, other in (("A", "B"), ("B", "A")):
             r = model.residuals(xs[f][None, :])[0]
             self.held[masks[other]] = r[masks[other]]
             r_in[masks[f]] = r[masks[f]]
-            self.ssr_in += float(np.sum(r[masks[f]] ** 2))
+            self.ssr_fold[f] = float(np.sum(r[masks[f]] ** 2))
+        self.ssr_in = self.ssr_fold["A"] + self.ssr_fold["B"]
         self.r_in = r_in
         self.chi2 = float(np.mean(self.held[self.used] ** 2))
 
@@ -110,7 +111,7 @@ class Selector:
                     best, best_ssr = x, s
             if new:
                 best = self.converge(model, best, self.masks[f], self.settings.fit_iterations,
-                                     prev.ssr(x_prev, self.masks[f]))
+                                     starts_from.ssr_fold[f])
             xs[f] = best
         return SetFit(model, xs, self.masks)
 
@@ -133,8 +134,8 @@ class Selector:
         Returns the additions ordered by that held-out chi^2 and the table."""
         rows = []
         masks = self.masks
-        held_cur = float(np.mean(cur.model.residuals(cur.xs["A"][None, :])[0][masks["B"]] ** 2))
-        ssr_cur = cur.model.ssr(cur.xs["A"], masks["A"])
+        held_cur = float(np.mean(cur.held[masks["B"]] ** 2))  # fold B predicted by the fit on fold A
+        ssr_cur = cur.ssr_fold["A"]
         for add in additions:
             if progress:
                 progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
