@@ -64,6 +64,10 @@ class BlindSettings:
     vary_form : vary each injected effect's form (the effect's own :meth:`random_form`).
     vary_motor : relative spread of the motor's parameters, each scaled by exp(U(-v, v)).
     exclude_effects : effects never injected.
+    only_effects : if not empty, the only effects injected (the others are never drawn).
+    cycle_effects : single-effect sets take the effects in turn (set ``j`` of them the
+        ``j mod m``-th of the ``m`` allowed, in name order), so that each effect gets its share
+        of the sets instead of a random count (the per-effect tallies of new effects).
     base_case : the diagnosis's time-domain base model case (``diagnosis.base_case``; 2 holds
         Coulomb friction, which is then never injected), None when the config has none.
     workdir : folder of the data sets (``sets/``), their truth (``truth/``) and the diagnoses.
@@ -91,6 +95,8 @@ class BlindSettings:
     vary_form: bool = True
     vary_motor: float = 0.0
     exclude_effects: tuple[str, ...] = ()
+    only_effects: tuple[str, ...] = ()
+    cycle_effects: bool = False
     base_case: int | None = None
     resume: bool = True
     report_only: bool = False
@@ -115,6 +121,8 @@ class BlindSettings:
             two_share=float(run.get("two_share") or 0.0),
             vary_form=bool(run.get("vary_form", True)), vary_motor=float(run.get("vary_motor") or 0.0),
             exclude_effects=tuple(str(e) for e in run.get("exclude_effects") or ()),
+            only_effects=tuple(str(e) for e in run.get("only_effects") or ()),
+            cycle_effects=bool(run.get("cycle_effects") or False),
             base_case=None if diagnosis.get("base_case") is None else int(diagnosis["base_case"]),
             resume=bool(run.get("resume", True)), report_only=bool(run.get("report_only") or False),
             duration=_float_or_none(run.get("duration")), sample_rate=_float_or_none(run.get("sample_rate")),
@@ -127,6 +135,10 @@ class BlindSettings:
     def in_base(self) -> tuple[str, ...]:
         """Effects the diagnosis's base model already holds (never injected)."""
         return IN_BASE.get(self.base_case, ())
+
+    def may_inject(self, name: str) -> bool:
+        """Whether effect ``name`` may be drawn (not excluded; in ``only_effects`` when given)."""
+        return name not in self.exclude_effects and (not self.only_effects or name in self.only_effects)
 
 
 def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
@@ -151,6 +163,13 @@ def n_effects_of(i: int, settings: BlindSettings) -> int:
     return 2 if i - n_free < n_two else 1
 
 
+def cycled(i: int, settings: BlindSettings, pool: list[str]) -> str:
+    """The effect of single-effect set ``i`` when ``settings.cycle_effects``: the effects of
+    ``pool`` in turn, counted from the first set with effects."""
+    n_free = int(round(float(settings.free_share or 0.0) * int(settings.n)))
+    return pool[(i - n_free) % len(pool)]
+
+
 def draw_sets(settings: BlindSettings, problem: str = "timedomain", motor_keys=MOTOR_KEYS, exclude=()) -> list[dict]:
     """The ``own`` draws: effects (none, one or two), sizes, forms (each effect's own
     :meth:`~benchmark.core.effects.Effect.random_form`), motor spread, noise seed.
@@ -158,7 +177,7 @@ def draw_sets(settings: BlindSettings, problem: str = "timedomain", motor_keys=M
     Each set has its own random stream (spawned from ``settings.seed``), so a set's draw does not
     depend on how many sets come before it."""
     effects = load_effects(problem)
-    names = sorted(n for n in effects if n not in exclude and n not in settings.exclude_effects)
+    names = sorted(n for n in effects if n not in exclude and settings.may_inject(n))
     seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
     draws = []
     for i, ss in enumerate(seeds):
@@ -168,6 +187,8 @@ def draw_sets(settings: BlindSettings, problem: str = "timedomain", motor_keys=M
         else:
             k = int(rng.random() >= 1.0 / (1 + len(names)))
         chosen = sorted(str(e) for e in rng.choice(names, size=k, replace=False)) if k else []
+        if settings.cycle_effects and k == 1:
+            chosen = [cycled(i, settings, names)]
         d = {"index": i, "effects": chosen, "noise_seed": int(rng.integers(2**31 - 1))}
         spread = settings.vary_motor
         d["motor_scale"] = {m: float(np.exp(rng.uniform(-spread, spread))) for m in motor_keys}
@@ -215,95 +236,6 @@ def diagnosis_config(settings: BlindSettings, folder: Path) -> DictConfig:
         c.effects, c.effect_size, c.effect_form = [], {}, {}
         c.figures = False
     return c
-
-
-# -- sources ---------------------------------------------------------------------------------
-def own_source(settings: BlindSettings):
-    """(draws, make(d, folder)) of the project's own synthetic plant."""
-    from synthetic.timedomain import generate
-
-    draws = draw_sets(settings, exclude=settings.in_base)
-
-    def make(d, folder):
-        generate(generator_config(settings, d), folder)
-
-    return draws, make
-
-
-def plant_source(settings: BlindSettings):
-    """(draws, make) of the independent plant: its own motors, scenarios, sizes, forms, noise."""
-    from synthetic.independent import EFFECTS, draw_blind_set, make_dataset, write_dataset
-
-    ours = set(load_effects("timedomain"))
-    skip = set(settings.in_base) | set(settings.exclude_effects)
-    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
-    draws = []
-    for i, ss in enumerate(seeds):
-        rng = np.random.default_rng(ss)
-        k = n_effects_of(i, settings)
-        kind = str(rng.choice(["dol", "six_step", "pwm"], p=[0.4, 0.35, 0.25]))
-        pool = sorted(e for e in EFFECTS if e in ours and e not in skip
-                      and not (EFFECTS[e].inverter_only and kind == "dol"))
-        chosen = sorted(str(e) for e in rng.choice(pool, size=k, replace=False)) if k else []
-        spec = draw_blind_set(rng, effects=chosen, scenario=kind)
-        if settings.plant_duration:  # default: the plant's own draw (0.8-1.5 s: big motors need it)
-            spec["scenario"]["duration"] = settings.plant_duration
-        if not settings.plant_stop:
-            spec["stop"] = None
-        draws.append({"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]})
-
-    def make(d, folder):
-        write_dataset(make_dataset(d["spec"]), folder)
-
-    return draws, make
-
-
-MOTULATOR_EFFECTS = ("main_saturation", "two_mass", "load_torque")
-
-
-def motulator_source(settings: BlindSettings):
-    """(draws, make) of motulator: the preset motor spread, dol or six-step, its three effects."""
-    from synthetic.motulator_source import make_motulator_dataset
-
-    base = copy.deepcopy(dict(settings.run["motor"]))
-    spread = settings.vary_motor
-    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
-    draws = []
-    for i, ss in enumerate(seeds):
-        rng = np.random.default_rng(ss)
-        k = n_effects_of(i, settings)
-        chosen = sorted(str(e) for e in rng.choice(MOTULATOR_EFFECTS, size=k, replace=False)) if k else []
-        par = dict(base["parameters"])
-        for m in MOTOR_KEYS:
-            par[m] = float(par[m]) * float(np.exp(rng.uniform(-spread, spread)))
-        opts = {}
-        for e in chosen:
-            if e == "main_saturation":
-                opts[e] = {"size": float(rng.uniform(0.15, 0.5)), "exponent": float(rng.choice([2.0, 4.0, 6.0]))}
-            elif e == "two_mass":
-                opts[e] = {"size": float(rng.uniform(0.3, 0.6)), "resonance_hz": float(rng.uniform(15, 40)),
-                           "damping_ratio": float(rng.uniform(0.05, 0.2))}
-            else:
-                form = str(rng.choice(["step", "constant", "quadratic"]))
-                opts[e] = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
-                if form == "step":
-                    opts[e]["time"] = float(rng.uniform(0.3, 0.6) * settings.duration)
-        scenario = str(rng.choice(["dol", "six_step"]))
-        motor = {"parameters": par, "pole_pairs": int(base["pole_pairs"]), "frequency": 50.0,
-                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": settings.rated_power}
-        noise = {"current_std": float(rng.uniform(0.02, 0.08)), "current_colored_std": float(rng.uniform(0.0, 0.05)),
-                 "speed_std": float(rng.uniform(0.05, 0.2)), "speed_quantum": float(rng.choice([0.0, 0.1, 0.5]))}
-        draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
-                      "noise": noise, "seed": int(rng.integers(2**31 - 1))})
-
-    def make(d, folder):
-        make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
-                               settings.duration, settings.sample_rate, settings.motulator_stop)
-
-    return draws, make
-
-
-SOURCES = {"own": own_source, "plant": plant_source, "motulator": motulator_source}
 
 
 def label_of(effects) -> str:
@@ -448,6 +380,8 @@ def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: 
 def run_source(settings: BlindSettings, command: str) -> dict:
     """Make, hide the truth of, and diagnose every set of ``settings.source``; write the scores
     to ``settings.out/<source>``."""
+    from benchmark.analysis.blind_sources import SOURCES
+
     source = settings.source
     if source not in SOURCES:
         from benchmark.core.errors import ConfigError

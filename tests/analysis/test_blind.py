@@ -90,6 +90,32 @@ def test_settings_are_made_once_from_the_config_and_the_draws_use_each_effects_o
     assert s.run["motor"]["parameters"]["Rs"] == cfg.motor.parameters.Rs  # the settings' copy is untouched
 
 
+NEW_EFFECTS = ["current_sensor_saturation", "speed_sensor_gain", "sensor_offset", "two_mass", "load_torque",
+               "channel_delay"]
+
+
+def test_per_effect_runs_inject_only_the_chosen_effects_each_in_turn():
+    """Issue 13's per-effect tally: ``only_effects`` limits the pool and ``cycle_effects`` gives
+    every effect the same number of single-effect sets, on the own and the independent plant."""
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    from benchmark.analysis.blind import BlindSettings, draw_sets
+    from benchmark.analysis.blind_sources import SOURCES
+
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        cfg = compose("blind", overrides=["n=14", "free_share=0.15", "two_share=0", "cycle_effects=true",
+                                          "only_effects=[" + ",".join(NEW_EFFECTS) + "]"])
+    s = BlindSettings.from_run(cfg)
+    assert s.may_inject("two_mass") and not s.may_inject("iron_loss")
+    for draws in (draw_sets(s, exclude=s.in_base), SOURCES["plant"](s)[0]):
+        assert [d["effects"] for d in draws[:2]] == [[], []]  # round(0.15 * 14) effect-free sets first
+        counts = {e: sum(d["effects"] == [e] for d in draws) for e in NEW_EFFECTS}
+        assert counts == {e: 2 for e in NEW_EFFECTS}, counts
+
+
 def test_an_effect_the_conditioning_removed_counts_as_found():
     """Issue 13: effects that conditioning removes count as found when its report names them
     (``removed_by_conditioning``, from ``StartupDataset.conditioning_removed``); a name only the

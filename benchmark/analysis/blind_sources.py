@@ -1,0 +1,115 @@
+"""The data sources of the blind evaluation (:mod:`benchmark.analysis.blind`).
+
+Each source is a function of the :class:`~benchmark.analysis.blind.BlindSettings` returning
+``(draws, make)``: the list of drawn sets (each a dict with ``index`` and the injected
+``effects``) and ``make(draw, folder)``, which writes that set's data folder (with its
+``truth.yaml``, which the loop moves away before the diagnosis sees the folder).
+
+* ``own``: the project's synthetic plant with the effects of ``conf/effect/``;
+* ``plant``: the independent flux-linkage plant (:mod:`synthetic.independent`);
+* ``motulator``: the third-party simulator (effects ``main_saturation``, ``two_mass``,
+  ``load_torque``).
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+
+from benchmark.analysis.blind import MOTOR_KEYS, BlindSettings, cycled, draw_sets, generator_config, n_effects_of
+from benchmark.core.effects import load_effects
+
+
+def own_source(settings: BlindSettings):
+    """(draws, make(d, folder)) of the project's own synthetic plant."""
+    from synthetic.timedomain import generate
+
+    draws = draw_sets(settings, exclude=settings.in_base)
+
+    def make(d, folder):
+        generate(generator_config(settings, d), folder)
+
+    return draws, make
+
+
+def plant_source(settings: BlindSettings):
+    """(draws, make) of the independent plant: its own motors, scenarios, sizes, forms, noise."""
+    from synthetic.independent import EFFECTS, draw_blind_set, make_dataset, write_dataset
+
+    ours = set(load_effects("timedomain"))
+    skip = set(settings.in_base) | set(settings.exclude_effects)
+    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
+    draws = []
+    for i, ss in enumerate(seeds):
+        rng = np.random.default_rng(ss)
+        k = n_effects_of(i, settings)
+        kind = str(rng.choice(["dol", "six_step", "pwm"], p=[0.4, 0.35, 0.25]))
+        pool = sorted(e for e in EFFECTS if e in ours and e not in skip and settings.may_inject(e)
+                      and not (EFFECTS[e].inverter_only and kind == "dol"))
+        chosen = sorted(str(e) for e in rng.choice(pool, size=k, replace=False)) if k else []
+        if settings.cycle_effects and k == 1:
+            chosen = [cycled(i, settings, sorted(e for e in EFFECTS if e in ours and e not in skip
+                                                 and settings.may_inject(e)))]
+            if EFFECTS[chosen[0]].inverter_only and kind == "dol":
+                kind = str(rng.choice(["six_step", "pwm"]))
+        spec = draw_blind_set(rng, effects=chosen, scenario=kind)
+        if settings.plant_duration:  # default: the plant's own draw (0.8-1.5 s: big motors need it)
+            spec["scenario"]["duration"] = settings.plant_duration
+        if not settings.plant_stop:
+            spec["stop"] = None
+        draws.append({"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]})
+
+    def make(d, folder):
+        write_dataset(make_dataset(d["spec"]), folder)
+
+    return draws, make
+
+
+MOTULATOR_EFFECTS = ("main_saturation", "two_mass", "load_torque")
+
+
+def motulator_source(settings: BlindSettings):
+    """(draws, make) of motulator: the preset motor spread, dol or six-step, its three effects."""
+    from synthetic.motulator_source import make_motulator_dataset
+
+    base = copy.deepcopy(dict(settings.run["motor"]))
+    spread = settings.vary_motor
+    seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
+    draws = []
+    for i, ss in enumerate(seeds):
+        rng = np.random.default_rng(ss)
+        k = n_effects_of(i, settings)
+        chosen = sorted(str(e) for e in rng.choice(MOTULATOR_EFFECTS, size=k, replace=False)) if k else []
+        par = dict(base["parameters"])
+        for m in MOTOR_KEYS:
+            par[m] = float(par[m]) * float(np.exp(rng.uniform(-spread, spread)))
+        opts = {}
+        for e in chosen:
+            if e == "main_saturation":
+                opts[e] = {"size": float(rng.uniform(0.15, 0.5)), "exponent": float(rng.choice([2.0, 4.0, 6.0]))}
+            elif e == "two_mass":
+                opts[e] = {"size": float(rng.uniform(0.3, 0.6)), "resonance_hz": float(rng.uniform(15, 40)),
+                           "damping_ratio": float(rng.uniform(0.05, 0.2))}
+            else:
+                form = str(rng.choice(["step", "constant", "quadratic"]))
+                opts[e] = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
+                if form == "step":
+                    opts[e]["time"] = float(rng.uniform(0.3, 0.6) * settings.duration)
+        scenario = str(rng.choice(["dol", "six_step"]))
+        motor = {"parameters": par, "pole_pairs": int(base["pole_pairs"]), "frequency": 50.0,
+                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": settings.rated_power}
+        noise = {"current_std": float(rng.uniform(0.02, 0.08)), "current_colored_std": float(rng.uniform(0.0, 0.05)),
+                 "speed_std": float(rng.uniform(0.05, 0.2)), "speed_quantum": float(rng.choice([0.0, 0.1, 0.5]))}
+        draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
+                      "noise": noise, "seed": int(rng.integers(2**31 - 1))})
+
+    def make(d, folder):
+        make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
+                               settings.duration, settings.sample_rate, settings.motulator_stop)
+
+    return draws, make
+
+
+SOURCES = {"own": own_source, "plant": plant_source, "motulator": motulator_source}
