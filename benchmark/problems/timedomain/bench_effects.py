@@ -40,8 +40,9 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
     (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record). One
     augmentation fits all three: extras ``load_const``, ``load_quad``, ``load_step`` (over
-    ``T_acc``) and ``load_step_time`` (fraction of the record), the step smoothed over
-    ``max(2 Ts, 0.005 T_record)``.
+    ``T_acc``) and ``load_step_time`` (fraction of the record), the step smoothed over one
+    sample (a tanh of time constant ``Ts``): abrupt enough to excite a coupling resonance as a
+    real step does, smooth enough for its instant to be fitted between samples.
 ``channel_delay``
     A time skew between the voltage and current channels. Size: 0.1-2 samples; form ``lag``:
     ``current`` (the current channels lag) or ``voltage``. Augmentation: the simulated currents
@@ -300,7 +301,7 @@ class LoadTorque(Effect):
     FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]}]
 
     def _rise(self, ctx):
-        return max(2.0 * ctx.sample_time, 0.005 * ctx.record_duration)
+        return ctx.sample_time
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
