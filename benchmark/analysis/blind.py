@@ -17,8 +17,10 @@ the truth afterwards. Sources:
 Scores (:func:`summarise`): a verdict counts right when its effect set equals the injected
 set (``none`` for an effect-free set; an extra name is a miss; ``unexplained`` names no
 effect), whatever its status; with Wilson 95 % intervals. False alarms: effect-free sets
-whose status is not ``no_gap``. Two-effect sets: both injected effects named. An injected effect
-the conditioning removed and named (offsets, clipped or flattened currents) counts as found. Injected
+whose status is not ``no_gap`` or that name an effect anyway. Two-effect sets: both injected effects
+named. An injected effect the conditioning removed and named (offsets, clipped or flattened
+currents) counts as found; an effect the document says the base model holds (``held_by_base``: a
+constant load torque taken as Coulomb friction) counts as named, injected or not. Injected
 effects the base model cannot see (its held-out gap within the noise band) are left out and listed.
 """
 
@@ -255,7 +257,7 @@ def summarise(rows: list[dict]) -> dict:
     two = [r for r in scored if len(r["truth_effects"]) == 2]
     correct = [r for r in scored if r["truth"] == r["predicted"]]
     eff_correct = [r for r in eff_rows if r["truth"] == r["predicted"]]
-    alarms = [r for r in free if r["status"] != "no_gap"]
+    alarms = [r for r in free if r["status"] != "no_gap" or r["predicted"] != "none"]
     both = [r for r in two if set(r["truth_effects"]) <= set(r["effects"])]
     shares = [r["explained_share"] for r in eff_correct]
     labels = sorted({r["truth"] for r in rows} | {r["predicted"] for r in rows},
@@ -351,10 +353,14 @@ def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dic
 
 def score_row(index: int, effects: list, doc: dict) -> dict:
     """One scored row: the injected ``effects`` against the diagnosis document ``doc``; an injected
-    effect the conditioning removed and named (``removed_by_conditioning``) counts as found."""
+    effect the conditioning removed and named (``removed_by_conditioning``), or that the base model
+    holds under another name and the document says so (``held_by_base``: a constant load torque
+    as Coulomb friction), counts as found."""
+    held = [h["effect"] for h in doc.get("held_by_base", [])]  # named, whether injected or not
     conditioned = [e for e in doc.get("removed_by_conditioning", []) if e in effects]
+    conditioned += [e for e in held if e not in conditioned]
     named = [e for e in effects if e in conditioned or e in doc["effects"]]
-    named += [e for e in doc["effects"] if e not in effects]
+    named += [e for e in doc["effects"] + held if e not in effects and e not in named]
     return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
             "predicted": label_of(named) if conditioned else predicted_label(doc), "status": doc["status"],
             "verdict": doc["verdict"], "effects": named if conditioned else list(doc["effects"]),

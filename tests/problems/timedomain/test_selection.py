@@ -112,3 +112,28 @@ def test_no_look_ahead_near_the_noise_or_without_room_or_when_turned_off():
     off = DiagnosisSettings(pair_keep=0)
     assert _Given(held, off).pair_lookahead([], [LOAD, GAIN], far, BAND, 100.0, rows, []) is None
     assert np.isfinite(far.chi2)
+
+
+def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_load():
+    """A constant passive load torque has Coulomb friction's equation: the case-2 base absorbs it
+    (independent plant, 7.5 kW motor, 57 % of rated torque: fitted fc 29.0 N m against the load's
+    28.8). The document says so (``held_by_base``), and the blind score counts the load as named."""
+    from benchmark.analysis.blind import score_row
+    from benchmark.core.effects import EffectContext
+    from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, held_by_base
+
+    ctx = EffectContext(w_e=314.16, V1=326.6, I_peak=120.0, w_sync=157.08, dc_link_voltage=0.0, E_cu=1.0,
+                        L_M=0.12, L_sigma=0.006, T_acc=60.0)
+    names, st = ["Rs", "Ls", "Le", "Rr", "J", "fv", "fc"], DiagnosisSettings()
+    x = np.array([0.8, 0.127, 0.0064, 0.75, 0.027, 0.001, 29.0])
+    held = held_by_base(names, x, ctx, st)
+    assert [(h["effect"], h["form"]) for h in held] == [("load_torque", "constant")]
+    assert abs(held[0]["share_of_T_acc"] - 29.0 / 60.0) < 1e-12
+    x[-1] = 0.02 * 60.0  # 2 % of T_acc: a motor's own friction, nothing to report
+    assert held_by_base(names, x, ctx, st) == []
+    assert held_by_base(names[:-1], x[:-1], ctx, st) == []  # case-1 base: no fc in it
+    doc = {"status": "unexplained", "verdict": "unexplained", "effects": [], "explained_share": 0.0,
+           "gap_before": {"heldout_rms_over_noise": 1.13}, "gap_after": {"heldout_rms_over_noise": 1.13},
+           "held_by_base": held}
+    assert score_row(2, ["load_torque"], doc)["predicted"] == "load_torque"
+    assert score_row(3, [], doc)["predicted"] == "load_torque"  # on an effect-free set it is a miss

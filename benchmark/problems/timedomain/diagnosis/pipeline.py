@@ -63,7 +63,8 @@ from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_nois
 from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 
-__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "friction_scale", "localise",
+__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "friction_scale", "held_by_base",
+           "localise",
            "screen", "verdict_of"]
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
@@ -101,6 +102,11 @@ class DiagnosisSettings:
         ``[c / base_span, c base_span]`` about the base identification ``c``: an identification
         pulled far off by the unmodelled effects (a stator resistance three times its DC value)
         must stay inside the box, or the augmented model can never return to the motor.
+    load_friction_share : a case-2 base whose Coulomb friction exceeds this share of ``T_acc``
+        (the torque scale of :class:`~benchmark.core.effects.EffectContext`, 1-2 times rated
+        torque) holds a constant load torque: an induction motor's own friction is 0.3-2 % of
+        its rated torque, a constant passive load has the same equation, so the record cannot
+        tell them apart; the document then lists ``load_torque`` under ``held_by_base``.
     """
 
     base_case: int = 2
@@ -118,12 +124,29 @@ class DiagnosisSettings:
     base_span: float = 5.0
     pair_keep: int = 2
     final_iterations: int = 60
+    load_friction_share: float = 0.04
 
 
 def friction_scale(estimate: dict[str, float], ctx) -> float:
     """Scale of the Coulomb friction's search range (N m): 0.3 of the viscous torque at
     synchronous speed (``fc`` is searched in ``[0, 5 fc + this]``)."""
     return 0.3 * estimate["fv"] * ctx.w_sync + 1e-9
+
+
+def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettings) -> list[dict]:
+    """Effects the base model already holds under another name: a Coulomb friction above
+    ``settings.load_friction_share`` of ``T_acc`` is a constant (passive) load torque."""
+    if "fc" not in names or ctx.torque_scale <= 0:
+        return []
+    fc = float(x[names.index("fc")])
+    share = fc / ctx.torque_scale
+    if share <= settings.load_friction_share:
+        return []
+    return [{"effect": "load_torque", "form": "constant", "torque_Nm": fc, "share_of_T_acc": share,
+             "why": f"the base model's Coulomb friction, {fc:.4g} N m, is {100 * share:.0f} % of the torque "
+                    f"scale T_acc = {ctx.torque_scale:.4g} N m (a motor's own friction is 0.3-2 % of rated "
+                    f"torque): a constant load torque, which acts as Coulomb friction does and cannot be told "
+                    f"apart from it on this record"}]
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
@@ -330,6 +353,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "facts": {k: v for k, v in facts.items()},
         "conditioning": list(ds.conditioning),
         "removed_by_conditioning": list(ds.conditioning_removed),
+        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }

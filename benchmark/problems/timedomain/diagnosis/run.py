@@ -115,6 +115,8 @@ def render_markdown(doc: dict) -> str:
         lines.append(f"Best candidates, removing too little to explain the gap: {', '.join(doc['weak_effects'])}.")
     for ex in doc["excluded"]:
         lines.append(f"Not a candidate: {ex['effect']}: {ex['reason']}.")
+    for h in doc.get("held_by_base", []):
+        lines.append(f"Held by the base model: {h['effect']} ({h['form']}): {h['why']}.")
     if doc.get("removed_by_conditioning"):
         lines.append("Found and removed by the conditioning on load (the diagnosis ran on the conditioned record): "
                      + ", ".join(doc["removed_by_conditioning"]) + ".")
