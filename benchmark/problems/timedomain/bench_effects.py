@@ -15,9 +15,11 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     phase, then back to alpha-beta; extras ``cs_level`` (``L`` over the recorded current peak)
     and ``cs_sharpness`` ``n`` (about 2.5 matches ``tanh``, 8-15 a knee, 30+ a clip).
 ``speed_sensor_gain``
-    Tachometer ``(1 + g) w + w_0``. Size: ``|g|``, 0.01-0.05; forms: ``sign`` of ``g``,
-    ``offset`` ``w_0`` as a fraction of synchronous speed (within +-0.005). Extras
-    ``tach_gain_error`` (fraction) and ``tach_offset`` (fraction of synchronous speed).
+    Tachometer ``(1 + g) w + w_0`` (the plant), fitted as ``(1 + g + a sin(theta) + b cos(theta)) w
+    + w_0`` with a ripple once per revolution of the shaft angle ``theta`` (real tachometers
+    have one). Size: ``|g|``, 0.01-0.05; forms: ``sign`` of ``g``, ``offset`` ``w_0`` as a fraction
+    of synchronous speed (within +-0.005). Extras ``tach_gain_error`` (fraction),
+    ``tach_offset`` (fraction of synchronous speed), ``tach_ripple_sin``, ``tach_ripple_cos``.
     Excluded when the record has no speed channel.
 ``sensor_offset``
     DC offsets in the recorded voltage (V) and current (A) channels. A voltage offset drives a
@@ -154,8 +156,8 @@ class SpeedSensorGain(Effect):
     name = "speed_sensor_gain"
     size_name = "gain_error"
     realistic = (0.01, 0.05)
-    extra_names = ("tach_gain_error", "tach_offset")
-    physics = "tachometer gain error and offset"
+    extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos")
+    physics = "tachometer gain error, offset and ripple at the rotation frequency"
     shows_in = "steady speed off synchronous-minus-slip; a constant ratio in the speed residual"
     measure_stage = 3
     FORM_DRAWS = {"sign": {"choice": [-1.0, 1.0]}, "offset": [-0.005, 0.005]}
@@ -165,18 +167,25 @@ class SpeedSensorGain(Effect):
 
     def plant_extras(self, size, ctx, form=None):
         form = {**self.form, **(form or {})}
-        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0))])
+        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0)), 0.0, 0.0])
 
     def extra_bounds(self, ctx):
-        return np.array([-0.1, -0.02]), np.array([0.1, 0.02])
+        return np.array([-0.1, -0.02, -0.05, -0.05]), np.array([0.1, 0.02, 0.05, 0.05])
 
     def extra_starts(self, ctx):
-        return [np.array([0.0, 0.0])]
+        return [np.array([0.0, 0.0, 0.0, 0.0])]
 
     def measure(self, sim, extras, ctx):
+        """``(1 + g) w + offset w_sync + w (a sin(theta) + b cos(theta))``: gain, offset and a
+        ripple once per revolution (an eccentric or unbalanced tachometer), ``theta`` the shaft
+        angle from the start of the record (the unknown initial angle is in ``a``, ``b``: the
+        ripple is linear in both, so a fit from zero is not stuck at a phase)."""
         extras = np.atleast_2d(extras)
         out = sim.copy()
-        out[:, 2] = sim[:, 2] * (1.0 + extras[:, 0:1]) + extras[:, 1:2] * ctx.w_sync
+        w = sim[:, 2]
+        theta = np.cumsum(np.nan_to_num(w), axis=1) * (ctx.sample_time or 1.0)
+        ripple = extras[:, 2:3] * np.sin(theta) + extras[:, 3:4] * np.cos(theta)
+        out[:, 2] = w * (1.0 + extras[:, 0:1] + ripple) + extras[:, 1:2] * ctx.w_sync
         return out
 
     def applies_to(self, facts):
@@ -186,7 +195,8 @@ class SpeedSensorGain(Effect):
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
-        return {"gain": float(1.0 + x[0]), "offset_rad_s": float(x[1] * ctx.w_sync)}
+        return {"gain": float(1.0 + x[0]), "offset_rad_s": float(x[1] * ctx.w_sync),
+                "ripple_per_revolution": float(np.hypot(x[2], x[3]))}
 
 
 # ----------------------------------------------------------------------------- offsets

@@ -66,7 +66,7 @@ def test_neutral_augmentations_leave_the_base_model_unchanged():
     ctx = _ctx()
     base = base_row(PAPER_MOTOR)[None]
     ref = simulate_extended_batch(base, va, vb, False, 1 / 12000, 1)
-    neutral = [("sensor_offset", np.zeros(4)), ("speed_sensor_gain", np.zeros(2)), ("channel_delay", np.zeros(1)),
+    neutral = [("sensor_offset", np.zeros(4)), ("speed_sensor_gain", np.zeros(4)), ("channel_delay", np.zeros(1)),
                ("load_torque", np.array([0.0, 0.0, 0.0, 0.5])), ("iron_loss", np.array([0.0, 0.5])),
                ("main_saturation", np.array([0.0, 6.0, 0.0, 0.5])), ("leakage_saturation", np.array([0.0, 2.0, 0.0]))]
     for name, x in neutral:
@@ -147,6 +147,24 @@ def test_fractional_delay_and_soft_compression():
     assert np.all(np.diff(f) >= -1e-12) and np.max(np.abs(f)) <= 10.0
     assert compress_soft(np.array([1e12]), 10.0, 60.0)[0] == pytest.approx(10.0)
     np.testing.assert_allclose(compress_soft(np.array([0.1]), 10.0, 3.0), 0.1, rtol=1e-6)  # (1e-2)^3/3
+
+
+def test_tachometer_ripple_once_per_revolution():
+    """``speed_sensor_gain`` fits a ripple once per revolution (real tachometers have one; the
+    independent plant's ``gain_ripple`` form): at constant speed ``w`` the reading is
+    ``w (1 + g + a sin(w t) + b cos(w t)) + offset w_sync``, linear in ``a`` and ``b``."""
+    eff = load_effects("timedomain")["speed_sensor_gain"]
+    ts, w = 1e-4, 150.0
+    ctx = EffectContext(w_e=314.16, V1=300.0, I_peak=50.0, w_sync=157.08, dc_link_voltage=0.0, E_cu=1.0,
+                        L_M=0.1, L_sigma=0.01, sample_time=ts)
+    sim = np.zeros((2, 3, 5000))
+    sim[:, 2] = w
+    out = eff.measure(sim, np.array([[0.02, 0.001, 0.0, 0.0], [0.0, 0.0, 0.01, -0.005]]), ctx)
+    np.testing.assert_allclose(out[0, 2], w * 1.02 + 0.001 * 157.08)
+    theta = w * ts * np.arange(1, 5001)
+    np.testing.assert_allclose(out[1, 2], w * (1 + 0.01 * np.sin(theta) - 0.005 * np.cos(theta)))
+    np.testing.assert_array_equal(out[:, :2], sim[:, :2])
+    assert eff.describe_fit(np.array([0.0, 0.0, 0.003, 0.004]), ctx)["ripple_per_revolution"] == pytest.approx(0.005)
 
 
 def test_leakage_curve_falls_from_the_unsaturated_value_to_its_floor():
