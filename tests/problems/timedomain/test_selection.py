@@ -128,7 +128,16 @@ def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_loa
     x = np.array([0.8, 0.127, 0.0064, 0.75, 0.027, 0.001, 29.0])
     held = held_by_base(names, x, ctx, st)
     assert [(h["effect"], h["form"]) for h in held] == [("load_torque", "constant")]
-    assert abs(held[0]["share_of_T_acc"] - 29.0 / 60.0) < 1e-12
+    assert abs(held[0]["share_of_scale"] - 29.0 / 60.0) < 1e-12
+    # with a nameplate the rated torque is the scale (a slow ramped start makes T_acc small)
+    from benchmark.problems.timedomain.diagnosis.pipeline import rated_torque
+
+    rated = rated_torque({"rated_power": 7500.0, "speed": 1440.0})
+    assert abs(rated - 49.736) < 1e-3
+    x_small = x.copy()
+    x_small[-1] = 0.015 * rated  # 1.5 % of rated: friction, though 1.2 % of a small T_acc would pass too
+    assert held_by_base(names, x_small, ctx, st, rated) == []
+    assert held_by_base(names, x, ctx, st, rated)[0]["scale"] == "rated torque"
     x[-1] = 0.02 * 60.0  # 2 % of T_acc: a motor's own friction, nothing to report
     assert held_by_base(names, x, ctx, st) == []
     assert held_by_base(names[:-1], x[:-1], ctx, st) == []  # case-1 base: no fc in it

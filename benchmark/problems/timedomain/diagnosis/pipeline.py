@@ -102,9 +102,10 @@ class DiagnosisSettings:
         ``[c / base_span, c base_span]`` about the base identification ``c``: an identification
         pulled far off by the unmodelled effects (a stator resistance three times its DC value)
         must stay inside the box, or the augmented model can never return to the motor.
-    load_friction_share : a case-2 base whose Coulomb friction exceeds this share of ``T_acc``
-        (the torque scale of :class:`~benchmark.core.effects.EffectContext`, 1-2 times rated
-        torque) holds a constant load torque: an induction motor's own friction is 0.3-2 % of
+    load_friction_share : a case-2 base whose Coulomb friction exceeds this share of the rated
+        torque (nameplate), or without a nameplate of ``T_acc`` (the torque scale of
+        :class:`~benchmark.core.effects.EffectContext`, 1-2 times rated torque on a direct start)
+        holds a constant load torque: an induction motor's own friction is 0.3-2 % of
         its rated torque, a constant passive load has the same equation, so the record cannot
         tell them apart; the document then lists ``load_torque`` under ``held_by_base``.
     """
@@ -133,20 +134,31 @@ def friction_scale(estimate: dict[str, float], ctx) -> float:
     return 0.3 * estimate["fv"] * ctx.w_sync + 1e-9
 
 
-def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettings) -> list[dict]:
+def rated_torque(nameplate: dict | None) -> float | None:
+    """Rated torque (N m) of a nameplate with rated power (W) and speed (rpm), else None."""
+    if not nameplate or not nameplate.get("rated_power") or not nameplate.get("speed"):
+        return None
+    return float(nameplate["rated_power"]) / (float(nameplate["speed"]) * 2.0 * np.pi / 60.0)
+
+
+def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettings,
+                 rated: float | None = None) -> list[dict]:
     """Effects the base model already holds under another name: a Coulomb friction above
-    ``settings.load_friction_share`` of ``T_acc`` is a constant (passive) load torque."""
-    if "fc" not in names or ctx.torque_scale <= 0:
+    ``settings.load_friction_share`` of the rated torque ``rated`` (N m, from the nameplate),
+    or without one of ``T_acc`` (which a slow ramped start makes small), is a constant
+    (passive) load torque."""
+    scale, label = (rated, "rated torque") if rated else (ctx.torque_scale, "torque scale T_acc")
+    if "fc" not in names or not scale or scale <= 0:
         return []
     fc = float(x[names.index("fc")])
-    share = fc / ctx.torque_scale
+    share = fc / scale
     if share <= settings.load_friction_share:
         return []
-    return [{"effect": "load_torque", "form": "constant", "torque_Nm": fc, "share_of_T_acc": share,
-             "why": f"the base model's Coulomb friction, {fc:.4g} N m, is {100 * share:.0f} % of the torque "
-                    f"scale T_acc = {ctx.torque_scale:.4g} N m (a motor's own friction is 0.3-2 % of rated "
-                    f"torque): a constant load torque, which acts as Coulomb friction does and cannot be told "
-                    f"apart from it on this record"}]
+    return [{"effect": "load_torque", "form": "constant", "torque_Nm": fc, "share_of_scale": share,
+             "scale": label, "why": f"the base model's Coulomb friction, {fc:.4g} N m, is {100 * share:.0f} % of the "
+                                    f"{label} {scale:.4g} N m (a motor's own friction is 0.3-2 % of rated torque): a "
+                                    f"constant load torque, which acts as Coulomb friction does and cannot be told "
+                                    f"apart from it on this record"}]
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
@@ -353,7 +365,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "facts": {k: v for k, v in facts.items()},
         "conditioning": list(ds.conditioning),
         "removed_by_conditioning": list(ds.conditioning_removed),
-        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings),
+        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated_torque(ds.nameplate)),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
