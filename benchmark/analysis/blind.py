@@ -358,16 +358,16 @@ def score_row(index: int, effects: list, doc: dict) -> dict:
     as Coulomb friction), counts as found."""
     held = [h["effect"] for h in doc.get("held_by_base", [])]  # named, whether injected or not
     conditioned = [e for e in doc.get("removed_by_conditioning", []) if e in effects]
-    conditioned += [e for e in held if e not in conditioned]
-    named = [e for e in effects if e in conditioned or e in doc["effects"]]
+    found = conditioned + [e for e in held if e not in conditioned]
+    named = [e for e in effects if e in found or e in doc["effects"]]
     named += [e for e in doc["effects"] + held if e not in effects and e not in named]
     return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
-            "predicted": label_of(named) if conditioned else predicted_label(doc), "status": doc["status"],
-            "verdict": doc["verdict"], "effects": named if conditioned else list(doc["effects"]),
-            "conditioned": conditioned, "explained_share": float(doc["explained_share"]),
+            "predicted": label_of(named) if found else predicted_label(doc), "status": doc["status"],
+            "verdict": doc["verdict"], "effects": named if found else list(doc["effects"]),
+            "conditioned": conditioned, "held_by_base": held, "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
-            "invisible": bool(effects) and doc["status"] == "no_gap" and not conditioned}
+            "invisible": bool(effects) and doc["status"] == "no_gap" and not found}
 
 
 def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: str, title: str) -> dict:

@@ -39,19 +39,17 @@ def plant_source(settings: BlindSettings):
     from synthetic.independent import EFFECTS, draw_blind_set, make_dataset, write_dataset
 
     ours = set(load_effects("timedomain"))
-    skip = set(settings.in_base) | set(settings.exclude_effects)
+    allowed = sorted(e for e in EFFECTS if e in ours and e not in settings.in_base and settings.may_inject(e))
     seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
     draws = []
     for i, ss in enumerate(seeds):
         rng = np.random.default_rng(ss)
         k = n_effects_of(i, settings)
         kind = str(rng.choice(["dol", "six_step", "pwm"], p=[0.4, 0.35, 0.25]))
-        pool = sorted(e for e in EFFECTS if e in ours and e not in skip and settings.may_inject(e)
-                      and not (EFFECTS[e].inverter_only and kind == "dol"))
+        pool = [e for e in allowed if not (EFFECTS[e].inverter_only and kind == "dol")]
         chosen = sorted(str(e) for e in rng.choice(pool, size=k, replace=False)) if k else []
         if settings.cycle_effects and k == 1:
-            chosen = [cycled(i, settings, sorted(e for e in EFFECTS if e in ours and e not in skip
-                                                 and settings.may_inject(e)))]
+            chosen = [cycled(i, settings, allowed)]
             if EFFECTS[chosen[0]].inverter_only and kind == "dol":
                 kind = str(rng.choice(["six_step", "pwm"]))
         spec = draw_blind_set(rng, effects=chosen, scenario=kind)

@@ -64,8 +64,7 @@ from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 
 __all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "friction_scale", "held_by_base",
-           "localise",
-           "screen", "verdict_of"]
+           "localise", "rated_torque", "screen", "verdict_of"]
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
 HARMONIC_ORDERS = (-11, -7, -5, -1, 1, 5, 7, 11, 13)

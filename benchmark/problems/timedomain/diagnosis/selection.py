@@ -195,11 +195,6 @@ class Selector:
         rounds = []
         while len(chosen) < st.max_effects:
             pool = [e for e in candidates if e not in chosen]
-            if chosen:
-                chi2_chosen = cur.chi2
-                cur = self.refine(cur, band)
-                if rounds and cur.chi2 < chi2_chosen:
-                    rounds[-1]["refined_to"] = cur.chi2
             if not pool or cur.chi2 <= band**2:
                 break
             if len(pool) > st.screen_keep:
@@ -228,15 +223,13 @@ class Selector:
                 rnd["indistinguishable"] = [r["effect"] for r in rows[1:] if r["earns"] and best_row["excess_reduction"]
                                             - r["excess_reduction"] <= st.indistinguishable_margin]
                 chosen.append(best_eff)
-                cur = best_sf
+                cur = self.refine(best_sf, band)
                 continue
             pair = self.pair_lookahead(chosen, candidates, cur, band, n_eff, rows, rounds, progress)
             if pair is None:
                 break
             chosen += pair[0]
-            cur = pair[1]
-        if len(chosen) >= st.max_effects:
-            cur = self.refine(cur, band)
+            cur = self.refine(pair[1], band)
         return cur, rounds
 
     def pair_lookahead(self, chosen, candidates, cur: SetFit, band: float, n_eff: float, single_rows, rounds,
