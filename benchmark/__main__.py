@@ -28,7 +28,10 @@ def main(cfg) -> float | None:
     outcome = run(cfg, outdir)
     rec = outcome.record
     if HydraConfig.get().mode == RunMode.MULTIRUN:  # a sweep: one line per run, not interleaved tables
-        print(one_line(rec, outdir), flush=True)
+        # One write of the whole line: the sweep's workers share one pipe, and print's separate
+        # newline write let two lines run together.
+        sys.stdout.write(one_line(rec, outdir) + "\n")
+        sys.stdout.flush()
         return rec["cost"]
     print(format_table(rec))
     print(f"result: {outdir / 'result.json'}")
