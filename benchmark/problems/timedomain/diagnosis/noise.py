@@ -72,15 +72,12 @@ def fallback(x: np.ndarray, floor: float, why: str) -> NoiseEstimate:
                                   f"fourth differences ({why})"), x, floor)
 
 
-def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
-                                  rel_line: float = 1e-3) -> NoiseEstimate:
-    """Noise of a periodic segment whose amplitude still drifts (the end of a start-up):
-    least squares on the supply's harmonics each modulated by a polynomial in time of
-    ``order`` (and a polynomial trend). The harmonics kept are those whose amplitude in a plain
-    periodic fit exceeds ``rel_line`` of the largest. Each column at ``omega`` absorbs
-    ``g(omega)`` noise degrees of freedom (``g`` the AR(1) spectrum of the residual relative to
-    white), so the variance is divided by ``N - sum g`` and ``N_eff = (N - sum g)(1 - phi^2)/(1 + phi^2)``
-    as in :func:`benchmark.core.uncertainty.noise_from_periodic`."""
+def modulated_periodic_residual(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
+                                rel_line: float = 1e-3) -> tuple[np.ndarray, np.ndarray, int]:
+    """What is left of ``x`` after least squares on the supply's harmonics, each modulated by
+    a polynomial in time of ``order`` (and a polynomial trend); the harmonics kept are those
+    whose amplitude in a plain periodic fit exceeds ``rel_line`` of the largest. Returns the
+    residual, each column's normalised frequency (rad per sample) and the harmonics kept."""
     x = np.asarray(x, float).ravel()
     n = len(x)
     t = np.arange(n) / fs
@@ -100,13 +97,24 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
             cols += [tau**k * np.cos(h * w), tau**k * np.sin(h * w)]
             om += [2 * np.pi * h * f0 / fs] * 2
     A = np.column_stack(cols)
-    e = x - A @ least_squares_solve(A, x)
+    return x - A @ least_squares_solve(A, x), np.asarray(om), len(keep)
+
+
+def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
+                                  rel_line: float = 1e-3) -> NoiseEstimate:
+    """Noise of a periodic segment whose amplitude still drifts (the end of a start-up): the
+    spread of :func:`modulated_periodic_residual`. Each column at ``omega`` absorbs
+    ``g(omega)`` noise degrees of freedom (``g`` the AR(1) spectrum of the residual relative to
+    white), so the variance is divided by ``N - sum g`` and ``N_eff = (N - sum g)(1 - phi^2)/(1 + phi^2)``
+    as in :func:`benchmark.core.uncertainty.noise_from_periodic`."""
+    e, om, kept = modulated_periodic_residual(x, fs, f0, order, n_harmonics, rel_line)
+    n = len(e)
     phi = ar1_coefficient(e)
-    p_eff = min(float(np.sum(ar1_gain(phi, np.asarray(om)))), n / 2)
+    p_eff = min(float(np.sum(ar1_gain(phi, om))), n / 2)
     dof = max(n - p_eff, 1.0)
     n_eff = dof * (1 - phi**2) / (1 + phi**2)
     return NoiseEstimate(math.sqrt(float(e @ e) / dof), 1.0 / math.sqrt(2 * n_eff), n_eff,
-                         f"periodic fit, amplitudes drifting (order {order}; {f0:.4f} Hz, {len(keep)} harmonics)")
+                         f"periodic fit, amplitudes drifting (order {order}; {f0:.4f} Hz, {kept} harmonics)")
 
 
 def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndarray, i_beta: np.ndarray) -> int:
@@ -176,6 +184,38 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
         except ValueError as exc:
             out["speed"] = fallback(speed, floor, str(exc))
     return out
+
+
+def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
+                  supply_frequency: float) -> tuple[dict[str, NoiseEstimate], dict[str, np.ndarray]]:
+    """Noise of measured continuous voltages ``v_alpha``, ``v_beta`` (V), found as the currents'
+    is: the pre-trigger's spread where there is one, else what the drifting-harmonics fit of the
+    steady state leaves (the grid's harmonics, unbalance and slow dips are signal, not noise).
+    Also returns that noise itself (the quiet segment less its mean, or the fit's residual),
+    whose spectrum, not only its spread, decides what it does to the model (empty when the
+    fourth-difference fallback was used)."""
+    n = len(t)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    v_floor = 1e-5 * float(np.max(np.hypot(v_alpha, v_beta)))
+    chans = {"v_alpha": np.asarray(v_alpha, float), "v_beta": np.asarray(v_beta, float)}
+    k_quiet = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    out: dict[str, NoiseEstimate] = {}
+    templates: dict[str, np.ndarray] = {}
+    has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
+    k_ss = steady_start(speed if has_speed else None, n, max(int(fs / supply_frequency), 1))
+    for ch, x in chans.items():
+        try:
+            if k_quiet >= MIN_QUIET:
+                out[ch] = _floored(noise_from_quiet(x[:k_quiet]), x[:k_quiet], v_floor)
+                templates[ch] = x[:k_quiet] - np.mean(x[:k_quiet])
+                continue
+            if (n - k_ss) / fs * supply_frequency < 2:
+                raise ValueError("steady state shorter than two periods")
+            out[ch] = _floored(noise_from_modulated_periodic(x[k_ss:], fs, supply_frequency), x[k_ss:], v_floor)
+            templates[ch] = modulated_periodic_residual(x[k_ss:], fs, supply_frequency)[0]
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            out[ch] = fallback(x, v_floor, str(exc))
+    return out, templates
 
 
 def stop_noise(speed: np.ndarray, w0: float) -> NoiseEstimate:

@@ -59,7 +59,8 @@ import numpy as np
 from benchmark.core.effects import Effect, effect_context
 from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_noise
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
+from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
 from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 
@@ -107,6 +108,8 @@ class DiagnosisSettings:
         holds a constant load torque: an induction motor's own friction is 0.3-2 % of
         its rated torque, a constant passive load has the same equation, so the record cannot
         tell them apart; the document then lists ``load_torque`` under ``held_by_base``.
+    voltage_noise : with measured continuous voltages (``input_hold: linear``), each channel's
+        noise level includes the voltage's noise carried through the model (:mod:`.input_noise`).
     """
 
     base_case: int = 2
@@ -125,6 +128,7 @@ class DiagnosisSettings:
     pair_keep: int = 2
     final_iterations: int = 60
     load_friction_share: float = 0.04
+    voltage_noise: bool = True
 
 
 def friction_scale(estimate: dict[str, float], ctx) -> float:
@@ -288,6 +292,10 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     masks = {"A": fold_a, "B": fold_b}
     fc_scale = friction_scale(base_estimate, ctx)
     centre = dict(base_estimate)
+    input_noise = None
+    if settings.voltage_noise:
+        first = JointModel(data, settings.base_case, [], ctx, centre, fc_scale, settings.base_span)
+        data, input_noise = with_voltage_noise(data, first, np.array([centre[n] for n in first.base_names]))
 
     sel = Selector(data, settings, ctx, centre, fc_scale, masks)
     base = sel.model([])
@@ -361,6 +369,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "noise": {ch: {"std": float(v.std), "rel_uncertainty": float(v.rel_uncertainty), "method": v.method}
                   for ch, v in data.noise.items()},
         "noise_level": data.sigma,
+        "voltage_noise": input_noise,
         "facts": {k: v for k, v in facts.items()},
         "conditioning": list(ds.conditioning),
         "removed_by_conditioning": list(ds.conditioning_removed),
