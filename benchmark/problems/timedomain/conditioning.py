@@ -19,8 +19,10 @@ zero sequence) and applies what it finds:
 * sensor offsets: estimated from the pre-trigger, else from whole supply periods of the
   steady tail, and removed when they are significant: larger than
   :data:`OFFSET_SIGNIFICANCE` of the channel's amplitude (0.3 V on a 325 V phase, 9 mA on a
-  9 A no-load current), so that clean and merely noisy records are left bit for bit as they
-  are. Voltages computed from switch states (``input_hold: zoh``) are not measured and get
+  9 A no-load current) and three of the estimate's own standard errors (coloured noise taken
+  into account), so that clean and merely noisy records are left bit for bit as they are: a
+  short pre-trigger of a probe whose zero drifts has a mean of a few tens of milliamperes that
+  is noise, and removing it would put that bias into the whole record. Voltages computed from switch states (``input_hold: zoh``) are not measured and get
   no voltage offset;
 * clipped (hard) or flattened (soft-saturated probe) current samples are masked:
   ``StartupRecord.weight`` is False there, with the count reported. The soft test looks for a
@@ -46,6 +48,16 @@ from benchmark.problems.timedomain.switch_on import SwitchingSteps, sampled_volt
 
 #: An offset is removed only when it exceeds this fraction of its channel's amplitude.
 OFFSET_SIGNIFICANCE = 1e-3
+#: ... and this many of its own standard errors (the noise's own mean over the segment is no offset).
+OFFSET_STANDARD_ERRORS = 3.0
+
+
+def significant(value: float, standard_error: float, amplitude: float) -> bool:
+    """An estimated offset is removed when it exceeds both :data:`OFFSET_SIGNIFICANCE` of the
+    channel's amplitude and :data:`OFFSET_STANDARD_ERRORS` of its own standard error."""
+    return abs(value) > max(OFFSET_SIGNIFICANCE * amplitude, OFFSET_STANDARD_ERRORS * standard_error)
+
+
 #: A record shorter than this many supply periods is not conditioned (too short to tell).
 MIN_PERIODS = 3.0
 
@@ -119,29 +131,29 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         said.append("no pre-trigger: the record starts energised")
     said.extend(report.notes)
     removed, kept = [], []
-    offsets = {name: (value, unit, how) for name, value, unit, how in report.offsets}
+    offsets = {name: (value, unit, how, se) for name, value, unit, how, se in report.offsets}
     from_tail = report.switch_on is None or report.switch_on < 50
     if from_tail and not steady_tail(i, ts, report.f0):
         said.append("sensor offsets not estimated: no pre-trigger and the record does not reach a steady state "
                     "(its last supply periods still change)")
-        offsets = {name: (0.0, unit, how) for name, (value, unit, how) in offsets.items()}
+        offsets = {name: (0.0, unit, how, se) for name, (value, unit, how, se) in offsets.items()}
     v_out, i_out = v.copy(), i.copy()
     for row, name in enumerate(("v_r", "v_s", "v_t")):
-        value, unit, how = offsets[name]
+        value, unit, how, se = offsets[name]
         amplitude = np.sqrt(2.0) * np.std(v[row, n // 2:])
-        if measured_voltage and abs(value) > OFFSET_SIGNIFICANCE * amplitude:
+        if measured_voltage and significant(value, se, amplitude):
             v_out[row] -= value
             removed.append(f"{name} {value:+.2f} V ({how.split(' over ')[0]})")
         else:
-            kept.append(f"{name} {value:+.3g} V")
+            kept.append(f"{name} {value:+.3g} +- {se:.2g} V")
     for row, name in enumerate(("i_r", "i_s")):
-        value, unit, how = offsets[name]
+        value, unit, how, se = offsets[name]
         amplitude = np.sqrt(2.0) * np.std(i[row, n // 2:])
-        if abs(value) > OFFSET_SIGNIFICANCE * amplitude:
+        if significant(value, se, amplitude):
             i_out[row] -= value
             removed.append(f"{name} {value:+.3f} A ({how.split(' over ')[0]})")
         else:
-            kept.append(f"{name} {value:+.3g} A")
+            kept.append(f"{name} {value:+.3g} +- {se:.2g} A")
     if removed:
         said.append("offsets removed: " + ", ".join(removed))
     elif "sensor offsets not estimated" not in said[-1]:

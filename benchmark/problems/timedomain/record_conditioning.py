@@ -72,13 +72,33 @@ def _tail_fit_offset(x, ts, f0, n_harmonics, mask):
         cols += [c, s, tc * c, tc * s]
     A = np.column_stack(cols)
     keep = ~mask if mask is not None else slice(None)
-    return float(np.linalg.lstsq(A[keep], x[keep], rcond=None)[0][0])
+    coef = np.linalg.lstsq(A[keep], x[keep], rcond=None)[0]
+    return float(coef[0]), x[keep] - A[keep] @ coef
+
+
+def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
+    """Square root of the long-run variance of noise ``e`` (``sigma^2 g(0)``, what sets the
+    spread of a mean: ``std(mean of N) = long_run_std / sqrt(N)``), by batch means: the
+    variance of the means of ``n_blocks`` consecutive blocks times the block length. Unlike an
+    AR(1) fit it does not need the noise's spectrum to have one pole: a probe's slowly drifting
+    zero under white noise has a small lag-one correlation and a long-run variance a hundred
+    times its white part."""
+    e = np.asarray(e, float)
+    e = e - np.mean(e)
+    L = len(e) // n_blocks
+    if L < 1:
+        return math.inf
+    means = e[:n_blocks * L].reshape(n_blocks, L).mean(axis=1)
+    return float(max(math.sqrt(L * np.var(means, ddof=1)), np.std(e)))
 
 
 def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None, *,
                      tail_s: float | None = None, n_harmonics: int = 7, guard: int = 3,
-                     mask=None, f0_from=None) -> tuple[float, str]:
-    """DC offset of one channel (units of ``x``) and how it was found.
+                     mask=None, f0_from=None) -> tuple[float, str, float]:
+    """DC offset of one channel (units of ``x``), how it was found, and its standard error:
+    :func:`long_run_std` over the square root of the samples averaged, the long-run spread
+    taken from the steady tail's residual where there is one (a pre-trigger of a few ms is too
+    short to show a slow drift, which it cannot tell from an offset) and from the segment itself.
 
     * pre-trigger (``pretrigger_end - guard >= 50`` samples): their mean. The channel is truly
       zero there (motor at rest, supply off); accuracy ``sigma sqrt(g(0) / N)``, ``g(0) =
@@ -101,7 +121,18 @@ def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None,
         seg = x[:pretrigger_end - guard]
         if mask is not None:
             seg = seg[~mask[:pretrigger_end - guard]]
-        return float(np.mean(seg)), f"pre-trigger mean over {len(seg)} samples"
+        spread = long_run_std(seg)
+        try:
+            spread = max(spread, long_run_std(_tail(x, ts, f0, tail_s, n_harmonics, mask, f0_from)[2]))
+        except (ValueError, np.linalg.LinAlgError):
+            pass
+        return float(np.mean(seg)), f"pre-trigger mean over {len(seg)} samples", spread / math.sqrt(len(seg))
+    off, n_per, e, f0 = _tail(x, ts, f0, tail_s, n_harmonics, mask, f0_from)
+    return off, f"steady-tail fit over {n_per} periods of {f0:.2f} Hz", long_run_std(e) / math.sqrt(len(e))
+
+
+def _tail(x, ts, f0, tail_s, n_harmonics, mask, f0_from):
+    """The steady tail's offset fit: (offset, whole periods used, residual, f0)."""
     n = len(x) // 3 if tail_s is None else min(len(x), int(round(tail_s / ts)))
     if f0 is None:
         f0 = estimate_frequency(x if f0_from is None else f0_from, ts, n * ts)
@@ -109,8 +140,8 @@ def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None,
     if n_per < 2:
         raise ValueError(f"estimate_offsets: the tail of {n * ts:.3g} s holds fewer than two periods of {f0:.4g} Hz")
     n = min(len(x), int(round(n_per / (f0 * ts))))
-    off = _tail_fit_offset(x[len(x) - n:], ts, f0, n_harmonics, None if mask is None else mask[len(x) - n:])
-    return off, f"steady-tail fit over {n_per} periods of {f0:.2f} Hz"
+    off, e = _tail_fit_offset(x[len(x) - n:], ts, f0, n_harmonics, None if mask is None else mask[len(x) - n:])
+    return off, n_per, e, f0
 
 
 def _runs(flag: np.ndarray) -> list[tuple[int, int]]:
@@ -317,7 +348,7 @@ class ConditioningReport:
     switch_on: int | None
     n_trimmed: int
     n_kept_before: int
-    offsets: tuple  # ((channel, value, unit, method), ...)
+    offsets: tuple  # ((channel, value, unit, method, standard_error), ...)
     n_clipped: tuple  # hard-clipped samples per current channel
     clip_levels: tuple  # ((low, high) or None per current channel), raw units
     n_saturated: tuple  # further samples of soft-saturated peaks per current channel
@@ -333,7 +364,7 @@ class ConditioningReport:
         else:
             out.append(f"switch-on at t = {self.switch_on * self.ts:.4f} s: {self.n_trimmed} pre-trigger samples "
                        f"trimmed ({self.n_kept_before} kept before it, bounce kept)")
-        parts = [f"{c} {val:+.{2 if u == 'V' else 3}f} {u} ({m.split(' over ')[0]})" for c, val, u, m in self.offsets]
+        parts = [f"{c} {val:+.{2 if u == 'V' else 3}f} {u} ({m.split(' over ')[0]})" for c, val, u, m, _ in self.offsets]
         out.append("offsets removed: " + ", ".join(parts))
         total = sum(self.n_clipped)
         if total:
@@ -396,14 +427,14 @@ def condition_record(v, i, ts: float, speed=None, *, f0: float | None = None, p:
              for x, h in zip(i, hard, strict=True)]
     offsets, vc, ic = [], np.empty_like(v), np.empty_like(i)
     for name, x, out in zip(("v_r", "v_s", "v_t"), v, vc, strict=True):
-        off, how = estimate_offsets(x, ts, k_on, f0, tail_s=tail_s)
+        off, how, se = estimate_offsets(x, ts, k_on, f0, tail_s=tail_s)
         out[:] = x - off
-        offsets.append((name, off, "V", how))
+        offsets.append((name, off, "V", how, se))
     levels = []
     for name, x, m, h, out in zip(("i_r", "i_s"), i, masks, hard, ic, strict=True):
-        off, how = estimate_offsets(x, ts, k_on, f0, tail_s=tail_s, mask=m)
+        off, how, se = estimate_offsets(x, ts, k_on, f0, tail_s=tail_s, mask=m)
         out[:] = x - off
-        offsets.append((name, off, "A", how))
+        offsets.append((name, off, "A", how, se))
         levels.append((float(x[h].min()), float(x[h].max())) if h.any() else None)
     sp, sp_off, check = None, math.nan, None
     if speed is not None:

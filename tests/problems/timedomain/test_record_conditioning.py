@@ -72,7 +72,7 @@ def test_offsets_with_pretrigger():
     v, i, _, _ = record(seed=1)
     errs = []
     for x, off, tol in [*zip(v, V_OFF, [0.05] * 3, strict=True), *zip(i, I_OFF, [0.01] * 2, strict=True)]:
-        est, how = estimate_offsets(x, TS, K_ON, F0)
+        est, how, _ = estimate_offsets(x, TS, K_ON, F0)
         errs.append(est - off)
         assert abs(est - off) < tol and how.startswith("pre-trigger")
     print("pre-trigger offset errors", np.round(errs, 4))
@@ -85,7 +85,7 @@ def test_offsets_without_pretrigger_and_frequency():
     assert abs(f - F0) < 0.01
     errs = []
     for x, off, tol in [*zip(v, V_OFF, [0.05] * 3, strict=True), *zip(i, I_OFF, [0.01] * 2, strict=True)]:
-        est, how = estimate_offsets(x, TS, None, None, f0_from=v[0])
+        est, how, _ = estimate_offsets(x, TS, None, None, f0_from=v[0])
         errs.append(est - off)
         assert abs(est - off) < tol and how.startswith("steady-tail"), (est, off, how)
     print("f0 error", f - F0, "steady-tail offset errors", np.round(errs, 4))
@@ -192,7 +192,7 @@ def test_live_low_voltage_at_the_start_is_no_pre_trigger():
     _, rep = condition_record(v, i, TS, f0=F0)
     assert rep.switch_on is None, rep.switch_on
     assert any("rest level" in n and "no pre-trigger" in n for n in rep.notes), rep.notes
-    offs = {name: value for name, value, unit, how in rep.offsets}
+    offs = {name: value for name, value, unit, how, se in rep.offsets}
     assert abs(offs["i_r"]) < 0.1 and abs(offs["i_s"]) < 0.1, offs  # true offsets: 0
 
 
@@ -200,5 +200,38 @@ def test_true_pre_trigger_is_kept_with_the_rest_check():
     v, i, _, _ = record()
     _, rep = condition_record(v, i, TS, f0=F0)
     assert rep.switch_on is not None and abs(rep.switch_on - K_ON) <= 2
-    offs = {name: value for name, value, unit, how in rep.offsets}
+    offs = {name: value for name, value, unit, how, se in rep.offsets}
     assert abs(offs["i_r"] - I_OFF[0]) < 0.01 and abs(offs["i_s"] - I_OFF[1]) < 0.01, offs
+
+
+def test_offset_standard_error_holds_for_a_slowly_drifting_probe_zero():
+    """A probe whose zero drifts slowly (AR(1), pole 0.995, 0.05 A) under 0.01 A white noise, no
+    offset: the pre-trigger's mean scatters by ~0.03 A from record to record, ten times what its
+    short-term spread suggests. The standard error (from the steady tail's long-run variance)
+    must cover that scatter, so that the conditioning does not remove the noise's own mean as
+    an offset; a real 0.2 A offset stays far outside it."""
+    from scipy.signal import lfilter
+    n_pre, n, pole = 300, 20_000, 0.995
+    t = np.arange(n) * TS
+    signal = np.where(np.arange(n) >= n_pre, 8.0 * np.sin(2 * np.pi * F0 * t), 0.0)
+    est, se, naive = [], [], []
+    for seed in range(40):
+        rng = np.random.default_rng(seed)
+        drift = lfilter([np.sqrt(1 - pole**2)], [1, -pole], 0.05 * rng.standard_normal(n + 2000))[2000:]
+        x = signal + drift + 0.01 * rng.standard_normal(n)
+        e, how, s = estimate_offsets(x, TS, n_pre, F0)
+        assert how.startswith("pre-trigger")
+        est.append(e)
+        se.append(s)
+        naive.append(np.std(x[:n_pre - 3]) / np.sqrt(n_pre - 3))
+    est, se, naive = np.array(est), np.array(se), np.array(naive)
+    scatter = float(np.std(est))
+    print(f"scatter of the mean {scatter:.4f} A, standard error median {np.median(se):.4f}, "
+          f"white-noise formula {np.median(naive):.4f}")
+    assert 0.5 < np.median(se) / scatter < 2.0
+    assert np.median(naive) < 0.3 * scatter  # what a white-noise formula would have claimed
+    assert np.mean(np.abs(est) > 3 * se) <= 0.05  # the noise's mean is (almost) never called an offset
+    rng = np.random.default_rng(99)
+    drift = lfilter([np.sqrt(1 - pole**2)], [1, -pole], 0.05 * rng.standard_normal(n + 2000))[2000:]
+    e, _, s = estimate_offsets(signal + 0.2 + drift + 0.01 * rng.standard_normal(n), TS, n_pre, F0)
+    assert abs(e - 0.2) < 4 * s and abs(e) > 3 * s
