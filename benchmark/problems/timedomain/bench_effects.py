@@ -262,25 +262,29 @@ class TwoMass(Effect):
     size_name = "resonance"
     size_unit = "Hz"
     realistic = (30.0, 200.0)
-    extra_names = ("tm_freq", "tm_ratio", "tm_zeta")
-    physics = "motor and load inertias coupled by a torsional spring and damper; speed sensed on the load side"
+    extra_names = ("tm_freq", "tm_ratio", "tm_zeta", "tm_backlash")
+    physics = ("motor and load inertias coupled by a torsional spring and damper, with free play (backlash); "
+               "speed sensed on the load side")
     shows_in = "speed oscillation and plateaus in the first cycles; torque ripple passed through the coupling"
     FORM_DRAWS = {"inertia_ratio": [0.3, 2.0], "damping_ratio": [0.02, 0.1]}
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
-        x = np.array([[float(size), float(form.get("inertia_ratio", 1.0)), float(form.get("damping_ratio", 0.05))]])
+        x = np.array([[float(size), float(form.get("inertia_ratio", 1.0)), float(form.get("damping_ratio", 0.05)),
+                       float(form.get("backlash", 0.0))]])
         return self.augment(row[None, :], x, ctx)[0]
 
     def _f_max(self, ctx):
         return 400.0 if not ctx.sample_time else min(400.0, 0.125 / ctx.sample_time)
 
     def extra_bounds(self, ctx):
-        return np.array([10.0, 0.05, 0.002]), np.array([self._f_max(ctx), 5.0, 0.7])
+        """Resonance (Hz), J_load / J_motor, damping ratio, half-width of the free play (rad,
+        up to 2 degrees; jaw and pin couplings have a few tenths of a degree)."""
+        return np.array([10.0, 0.05, 0.002, 0.0]), np.array([self._f_max(ctx), 5.0, 0.7, 0.035])
 
     def extra_starts(self, ctx):
         fmax = self._f_max(ctx)
-        return [np.array([min(f, 0.9 * fmax), 1.0, 0.05]) for f in (40.0, 80.0, 150.0, 250.0)]
+        return [np.array([min(f, 0.9 * fmax), 1.0, 0.05, 0.0]) for f in (40.0, 80.0, 150.0, 250.0)]
 
     def augment(self, rows, extras, ctx):
         rows = rows.copy()
@@ -294,11 +298,13 @@ class TwoMass(Effect):
         rows[:, IDX["J_l"]] = J_l
         rows[:, IDX["k_sh"]] = k
         rows[:, IDX["c_sh"]] = 2.0 * z * np.sqrt(k * J_r)
+        rows[:, IDX["backlash"]] = extras[:, 3] if extras.shape[1] > 3 else 0.0
         return rows
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
-        return {"resonance_Hz": float(x[0]), "J_load_over_J_motor": float(x[1]), "damping_ratio": float(x[2])}
+        return {"resonance_Hz": float(x[0]), "J_load_over_J_motor": float(x[1]), "damping_ratio": float(x[2]),
+                "backlash_half_width_deg": float(np.degrees(x[3])) if len(x) > 3 else 0.0}
 
 
 class LoadTorque(Effect):

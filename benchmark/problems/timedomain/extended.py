@@ -48,7 +48,9 @@ Bench effects (appended fields, all neutral at zero):
   ``0.5 (1 + tanh((t - t_step)/t_rise))`` (``t_rise = 0``: a hard step); they act on the load
   side of a two-mass shaft, else on the single mass;
 * two-mass shaft (``J_l > 0``): the motor's own inertia is ``J``, the load's ``J_l``, coupled by
-  ``T_sh = k_sh twist + c_sh (w_m - w_l)``; friction ``fv``, ``fc`` on the motor shaft, the speed
+  ``T_sh = k_sh twist + c_sh (w_m - w_l)``; with free play of half-width ``backlash`` the spring
+  and damper act only in contact, ``T_sh = k_sh (twist -+ backlash) + c_sh (w_m - w_l)`` beyond
+  it and 0 within it; friction ``fv``, ``fc`` on the motor shaft, the speed
   output is the load side's (states ``w_l`` mechanical rad/s, ``twist`` rad);
 * leakage saturation with a linear part: ``i_s = dpsi/(L_sigma l(x))``,
   ``l = ls_floor + (1 - ls_floor)/(1 + ls_k x^ls_exp)`` (``ls_floor = 0``: the form above);
@@ -124,6 +126,20 @@ def _loads(c, t, w_mech):
         elif t >= c[29]:
             t_pass += T_s
     return t_pass, t_dyn
+
+
+@numba.njit(cache=True, inline="always")
+def _coupling_torque(twist, slip_speed, k, c, half_play):
+    """Torque (N m) through a coupling of stiffness ``k`` (N m/rad) and damping ``c`` (N m s/rad)
+    twisted by ``twist`` (rad) at ``slip_speed`` (rad/s), with free play of half-width
+    ``half_play`` (rad): nothing passes within the play, the spring and damper act in contact."""
+    if half_play <= 0.0:
+        return k * twist + c * slip_speed
+    if twist > half_play:
+        return k * (twist - half_play) + c * slip_speed
+    if twist < -half_play:
+        return k * (twist + half_play) + c * slip_speed
+    return 0.0
 
 
 @numba.njit(cache=True, inline="always")
@@ -256,7 +272,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
         # two-mass shaft: friction on the motor side, the load on the load side
         wm = w / p
         wl = x[8]
-        t_sh = c[32] * x[9] + c[33] * (wm - wl)
+        t_sh = _coupling_torque(x[9], wm - wl, c[32], c[33], c[37])
         drive_m = t_m - t_sh - fv * wm
         out[6] = p / J * (drive_m - _resist(direction, drive_m, fc))
         t_pass, t_dyn = _loads(c, t, wl)

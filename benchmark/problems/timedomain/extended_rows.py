@@ -52,6 +52,7 @@ EXTENDED_FIELDS = (
     "g_fe_s",  # S, iron-loss conductance across the stator EMF (terminals after Rs); 0 = none
     "ls_floor",  # -, leakage saturation: share of the leakage that never saturates (0: none)
     "t_split",  # -, Llr/Lls of the T circuit whose magnetising node saturates (0: the inverse-Gamma node)
+    "backlash",  # rad, half-width of a two-mass coupling's free play (0: none)
 )
 N_EXT = len(EXTENDED_FIELDS)
 IDX = {name: k for k, name in enumerate(EXTENDED_FIELDS)}
@@ -112,7 +113,7 @@ def valid_rows(rows: np.ndarray) -> np.ndarray:
     for name in ("Rs", "L_sigma", "L_M", "R_r1", "J", "ms_psi", "ls_psi"):
         ok &= r[:, IDX[name]] > 0
     for name in ("R_r2", "g_fe", "ms_k", "ls_k", "U_d", "i_0", "h_th", "fv", "fc", "ms_k2", "T_L", "T_q", "T_s",
-                 "t_rise", "J_l", "k_sh", "c_sh", "g_fe_s", "ls_floor"):
+                 "t_rise", "J_l", "k_sh", "c_sh", "g_fe_s", "ls_floor", "backlash"):
         ok &= r[:, IDX[name]] >= 0
     ok &= r[:, IDX["ls_floor"]] < 1
     ok &= r[:, IDX["t_split"]] >= 0

@@ -100,7 +100,7 @@ def test_augmentations_combine_without_overwriting_each_other():
     picks = {"double_cage": np.array([0.8, 0.004]), "main_saturation": np.array([0.2, 6.0, 0.05, 0.5]),
              "iron_loss": np.array([0.02, 0.5]), "leakage_saturation": np.array([1.0, 2.0, 0.3]),
              "temperature_drift": np.array([10.0]), "inverter_drop": np.array([0.02]),
-             "sensor_offset": np.array([0.01, -0.01, 0.0, 0.0]), "two_mass": np.array([80.0, 1.0, 0.05]),
+             "sensor_offset": np.array([0.01, -0.01, 0.0, 0.0]), "two_mass": np.array([80.0, 1.0, 0.05, 0.002]),
              "load_torque": np.array([0.1, 0.1, 0.2, 0.5])}
     alone = {n: EFFECTS[n].augment(rows, x[None], ctx) for n, x in picks.items()}
     both = rows
@@ -328,7 +328,7 @@ CASES = [
     ("sensor_offset", "voltage", "six_step", 1, None, 0.9),
     ("sensor_offset", "current", "dol", 2, None, 0.9),
     ("two_mass", "spring", "dol", 1, None, 0.9),
-    ("two_mass", "backlash", "six_step", 1, {"size": 50.0}, 0.8),
+    ("two_mass", "backlash", "six_step", 1, {"size": 50.0}, 0.95),  # 0.84 before the fit had free play
     ("load_torque", "constant", "dol", 1, None, 0.9),
     ("load_torque", "quadratic", "dol", 1, None, 0.9),
     ("load_torque", "step", "six_step", 1, None, 0.9),
