@@ -328,3 +328,43 @@ def test_a_short_free_stop_is_shared_by_both_folds(paper_records):
                                                      stops=[StopRecord(t=st["t"], speed=st["speed"])],
                                                      input_hold="zoh"))
     assert slow.stop_t[-1] > 4.0 and slow.stop_block() == 1.0
+
+
+def test_the_base_identification_keeps_the_lower_cost_of_two_seeds_and_says_when_they_disagree(out, monkeypatch):
+    """A wrong basin found by one seed (on the independent plant: J a ninth of the motor's at 8
+    times the cost) must not become the diagnosis's base: two seeds, the lower cost kept."""
+    from types import SimpleNamespace
+
+    import benchmark.problems.timedomain.diagnosis.run as run_mod
+    from benchmark.problems.timedomain.settings import TimeDomainSettings
+
+    doc = _diagnose(out, "two_seeds", "effects=[]")  # a real document: both runs recorded, agreeing
+    assert [r["seed"] for r in doc["base_identification"]["runs"]] == [0, 1] and doc["base_identification"]["agree"]
+    assert "ended apart" not in run_mod.render_markdown(doc)
+
+    class Problem:
+        def estimate(self, x):
+            return {"Rs": float(x[0]), "J": float(x[1])}
+
+        def dataset_with_nuisance(self):
+            return "with nuisance"
+
+    monkeypatch.setattr(run_mod, "problem_from_dataset", lambda settings, ds, truth: Problem())
+    monkeypatch.setattr(run_mod, "refine_nuisance", lambda problem, x, cost: None)
+    ends = {12: (np.array([1.28, 0.004]), 84521.4), 13: (np.array([0.81, 0.036]), 10760.4)}
+    seeds = []
+
+    def identify(problem, seed):
+        seeds.append(seed)
+        x, cost = ends[seed]
+        return SimpleNamespace(x=x, cost=cost, result=SimpleNamespace(message="converged"))
+
+    est, ds, record = run_mod.identify_base(TimeDomainSettings(), None, 2, identify, seed=12)
+    assert seeds == [12, 13] and est["J"] == 0.036 and ds == "with nuisance"
+    assert record["kept_seed"] == 13 and record["agree"] is False
+    assert [r["cost"] for r in record["runs"]] == [84521.4, 10760.4]
+    text = run_mod.render_markdown({**doc, "base_identification": record})
+    assert "ended apart" in text and "seed 13" in text
+    ends[13] = (np.array([1.28, 0.004]), 84521.4 * (1 + 1e-6))
+    _, _, record = run_mod.identify_base(TimeDomainSettings(), None, 2, identify, seed=12)
+    assert record["agree"] is True
