@@ -51,3 +51,20 @@ def test_a_start_that_has_not_settled_gets_its_noise_right(tmp_path, seed, monke
         assert old[ch].std > 1.35 * true, (ch, old[ch].std, true)
         assert 0.85 < new[ch].std / true < 1.2, (ch, new[ch].std, true)
         assert "piecewise linear" in new[ch].method and new[ch].rel_uncertainty >= noise.UNSETTLED_REL_UNCERTAINTY
+
+
+def test_a_low_live_voltage_with_moving_currents_is_no_quiet_pre_trigger():
+    """An inverter's V/f boost is below 5 % of the final voltage, so the voltage alone takes it
+    for a pre-trigger; the current it drives is signal, not noise. Noise only (white plus
+    AR(1), pole 0.91) is quiet; the same noise on a 2 A current at 1 Hz rising from zero is not,
+    and the whole-record estimate then uses the steady state instead."""
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(3)
+    n = 600
+    coloured = lfilter([np.sqrt(1 - 0.91**2)], [1, -0.91], 0.016 * rng.standard_normal(n))
+    noise_only = 0.026 * rng.standard_normal(n) + coloured
+    t = np.arange(n) / 12000.0
+    boost = 2.0 * (t / t[-1]) * np.sin(2 * np.pi * 1.0 * t + 0.3)
+    assert noise.quiet(noise_only, noise_only[::-1])
+    assert not noise.quiet(noise_only + boost, noise_only)

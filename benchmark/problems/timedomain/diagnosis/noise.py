@@ -142,6 +142,23 @@ def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndar
     return max(k - 2, 0)
 
 
+#: A pre-trigger is quiet when no current's spread exceeds this many times its white part.
+QUIET_SIGNAL_RATIO = 4.0
+
+
+def quiet(*currents: np.ndarray) -> bool:
+    """Whether a stretch of low voltage holds only noise: each current's spread within
+    :data:`QUIET_SIGNAL_RATIO` of its fourth-difference (white) estimate. An inverter's V/f
+    boost is a live voltage below 5 % of the final one, and the current it drives is signal:
+    on an independent-plant PWM start it put i_alpha's 'noise' at ten times i_beta's."""
+    for x in currents:
+        x = np.asarray(x, float)
+        white = fourth_difference(x)
+        if white > 0 and np.std(x) > QUIET_SIGNAL_RATIO * white:
+            return False
+    return True
+
+
 def steady_start(speed: np.ndarray | None, n: int, period: int = 1) -> int:
     """First sample of the steady state: the speed (averaged over a supply period) within
     0.5 % of its final value for good, plus three periods, and not before 60 % of the record (nor after 80 %)."""
@@ -188,6 +205,8 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
     i_floor = 1e-4 * float(np.max(np.abs(np.concatenate([i_alpha, i_beta]))))
     out: dict[str, NoiseEstimate] = {}
     k_quiet = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    if k_quiet >= MIN_QUIET and not quiet(i_alpha[:k_quiet], i_beta[:k_quiet]):
+        k_quiet = 0  # currents already move there (an inverter's low boost voltage): no pre-trigger
     chans = {"i_alpha": i_alpha, "i_beta": i_beta}
     if has_speed:
         chans["speed"] = speed
