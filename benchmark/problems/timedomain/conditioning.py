@@ -22,8 +22,8 @@ zero sequence) and applies what it finds:
   9 A no-load current) and three of the estimate's own standard errors (coloured noise taken
   into account), so that clean and merely noisy records are left bit for bit as they are: a
   short pre-trigger of a probe whose zero drifts has a mean of a few tens of milliamperes that
-  is noise, and removing it would put that bias into the whole record. Voltages computed from switch states (``input_hold: zoh``) are not measured and get
-  no voltage offset;
+  is noise, and removing it would put that bias into the whole record. Voltages computed from
+  switch states (``input_hold: zoh``) are not measured and get no voltage offset;
 * clipped (hard) or flattened (soft-saturated probe) current samples are masked:
   ``StartupRecord.weight`` is False there, with the count reported. The soft test looks for a
   third harmonic that flattens the peaks, which an inverter's six-step or PWM currents

@@ -364,7 +364,8 @@ class ConditioningReport:
         else:
             out.append(f"switch-on at t = {self.switch_on * self.ts:.4f} s: {self.n_trimmed} pre-trigger samples "
                        f"trimmed ({self.n_kept_before} kept before it, bounce kept)")
-        parts = [f"{c} {val:+.{2 if u == 'V' else 3}f} {u} ({m.split(' over ')[0]})" for c, val, u, m, _ in self.offsets]
+        parts = [f"{c} {val:+.{2 if u == 'V' else 3}f} {u} ({m.split(' over ')[0]})"
+                 for c, val, u, m, _ in self.offsets]
         out.append("offsets removed: " + ", ".join(parts))
         total = sum(self.n_clipped)
         if total:

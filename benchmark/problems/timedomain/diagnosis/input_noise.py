@@ -81,7 +81,8 @@ def with_voltage_noise(data: DiagnosisData, model: JointModel, x: np.ndarray) ->
                                   f"{old.method}; with the measured voltage's noise through the model "
                                   f"({math.sqrt(var_p):.3g} of {math.sqrt(var):.3g})")
     record = {"voltage_std": {ch: float(v.std) for ch, v in vn.items()},
-              "voltage_method": vn["v_alpha"].method + ("" if templates else "; white realisations"), "propagated_std": added,
+              "voltage_method": vn["v_alpha"].method + ("" if templates else "; white realisations"),
+              "propagated_std": added,
               "realisations": REALISATIONS}
     return replace(data, noise=noise), record
 
