@@ -121,6 +121,13 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
     ``g(omega)`` noise degrees of freedom (``g`` the AR(1) spectrum of the residual relative to
     white), so the variance is divided by ``N - sum g`` and ``N_eff = (N - sum g)(1 - phi^2)/(1 + phi^2)``
     as in :func:`benchmark.core.uncertainty.noise_from_periodic`."""
+    return modulated_periodic_noise(x, fs, f0, order, n_harmonics, rel_line, knot_periods)[0]
+
+
+def modulated_periodic_noise(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
+                             rel_line: float = 1e-3,
+                             knot_periods: float | None = None) -> tuple[NoiseEstimate, np.ndarray]:
+    """:func:`noise_from_modulated_periodic` and the residual it is the spread of (one fit)."""
     e, om, kept = modulated_periodic_residual(x, fs, f0, order, n_harmonics, rel_line, knot_periods)
     n = len(e)
     phi = ar1_coefficient(e)
@@ -129,7 +136,7 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
     n_eff = dof * (1 - phi**2) / (1 + phi**2)
     envelope = f"order {order}" if knot_periods is None else f"piecewise linear, knots every {knot_periods:g} periods"
     return NoiseEstimate(math.sqrt(float(e @ e) / dof), 1.0 / math.sqrt(2 * n_eff), n_eff,
-                         f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)")
+                         f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)"), e
 
 
 def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndarray, i_beta: np.ndarray) -> int:
@@ -159,14 +166,27 @@ def quiet(*currents: np.ndarray) -> bool:
     return True
 
 
+def quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta) -> int:
+    """:func:`pre_trigger_length` when that stretch is :func:`quiet` and at least
+    :data:`MIN_QUIET` long, else 0 (no pre-trigger to take the noise from)."""
+    k = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    return k if k >= MIN_QUIET and quiet(i_alpha[:k], i_beta[:k]) else 0
+
+
+def _departures(speed: np.ndarray, n: int, period: int) -> np.ndarray:
+    """Samples (the last period left out) where the speed averaged over ``period`` samples is
+    more than 0.5 % from its final value (the mean of the record's last tenth)."""
+    ws = np.convolve(speed, np.ones(period) / period, mode="same") if period > 1 else speed
+    final = float(np.mean(speed[int(0.9 * n):]))
+    return np.flatnonzero(np.abs(ws[:n - period] - final) > 0.005 * max(abs(final), 1e-9))
+
+
 def steady_start(speed: np.ndarray | None, n: int, period: int = 1) -> int:
     """First sample of the steady state: the speed (averaged over a supply period) within
     0.5 % of its final value for good, plus three periods, and not before 60 % of the record (nor after 80 %)."""
     if speed is None or not np.all(np.isfinite(speed)):
         return int(0.7 * n)
-    ws = np.convolve(speed, np.ones(period) / period, mode="same") if period > 1 else speed
-    final = float(np.mean(speed[int(0.9 * n):]))
-    off = np.flatnonzero(np.abs(ws[:n - period] - final) > 0.005 * max(abs(final), 1e-9))
+    off = _departures(speed, n, period)
     k = int(off[-1]) + 1 + 3 * period if len(off) else 0  # three periods more: the currents settle later
     return min(max(k, int(0.6 * n)), int(0.8 * n))
 
@@ -190,10 +210,7 @@ def settled(speed: np.ndarray | None, n: int, k_ss: int, fs: float, f0: float) -
     if speed is None or not np.all(np.isfinite(speed)):
         return False
     period = max(int(fs / f0), 1)
-    ws = np.convolve(speed, np.ones(period) / period, mode="same")
-    final = float(np.mean(speed[int(0.9 * n):]))
-    seg = ws[k_ss:n - period]
-    return bool(len(seg) and np.all(np.abs(seg - final) <= 0.005 * max(abs(final), 1e-9)))
+    return bool(k_ss < n - period and not np.any(_departures(speed, n, period) >= k_ss))
 
 
 def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: float,
@@ -204,9 +221,7 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
     has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
     i_floor = 1e-4 * float(np.max(np.abs(np.concatenate([i_alpha, i_beta]))))
     out: dict[str, NoiseEstimate] = {}
-    k_quiet = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
-    if k_quiet >= MIN_QUIET and not quiet(i_alpha[:k_quiet], i_beta[:k_quiet]):
-        k_quiet = 0  # currents already move there (an inverter's low boost voltage): no pre-trigger
+    k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
     chans = {"i_alpha": i_alpha, "i_beta": i_beta}
     if has_speed:
         chans["speed"] = speed
@@ -263,7 +278,7 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
     fs = 1.0 / float(np.median(np.diff(t)))
     v_floor = 1e-5 * float(np.max(np.hypot(v_alpha, v_beta)))
     chans = {"v_alpha": np.asarray(v_alpha, float), "v_beta": np.asarray(v_beta, float)}
-    k_quiet = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
     out: dict[str, NoiseEstimate] = {}
     templates: dict[str, np.ndarray] = {}
     has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
@@ -276,8 +291,8 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
                 continue
             if (n - k_ss) / fs * supply_frequency < 2:
                 raise ValueError("steady state shorter than two periods")
-            out[ch] = _floored(noise_from_modulated_periodic(x[k_ss:], fs, supply_frequency), x[k_ss:], v_floor)
-            templates[ch] = modulated_periodic_residual(x[k_ss:], fs, supply_frequency)[0]
+            est, templates[ch] = modulated_periodic_noise(x[k_ss:], fs, supply_frequency)
+            out[ch] = _floored(est, x[k_ss:], v_floor)
         except (ValueError, np.linalg.LinAlgError) as exc:
             out[ch] = fallback(x, v_floor, str(exc))
     return out, templates
