@@ -16,7 +16,8 @@
    while the next one earns its parameters; when none does and the gap left is far above the
    noise, a pair look-ahead (two effects that mask each other enter together when they earn
    together); then the backward check (``Selector.prune``): every
-   chosen effect must still earn the band part of that rule beside the others, else the
+   chosen effect must still earn the band part of that rule beside the others and remove
+   ``min_final_share`` (60 %) of the excess the final model leaves without it, else the
    weakest is dropped (``pruned``) and the check repeats.
 6. Verdict (:func:`verdict_of`) with the statuses below, each chosen effect's drop-one
    share, fitted parameters and standard errors, candidates that leave the same signature,
@@ -84,6 +85,8 @@ class DiagnosisSettings:
         friction; ``coulomb_friction`` is then a candidate).
     min_excess_reduction : share of the current excess held-out misfit a new effect must remove.
     min_band_drop : that drop must also exceed this fraction of the noise band (chi^2 units).
+    min_final_share : backward check: in the final model (two or more effects), dropping an
+        effect must raise the held-out chi^2 by this share of the excess left without it.
     explained_share, partly_share : shares of the excess separating the statuses.
     max_effects : at most this many effects are chosen.
     indistinguishable_margin : a candidate whose held-out excess reduction in the round an
@@ -115,6 +118,7 @@ class DiagnosisSettings:
     base_case: int = 2
     min_excess_reduction: float = 0.15
     min_band_drop: float = 0.5
+    min_final_share: float = 0.6
     explained_share: float = 0.9
     partly_share: float = 0.3
     max_effects: int = 4
