@@ -16,9 +16,10 @@
    while the next one earns its parameters; when none does and the gap left is far above the
    noise, a pair look-ahead (two effects that mask each other enter together when they earn
    together); then the backward check (``Selector.prune``): every
-   chosen effect must still earn the band part of that rule beside the others and remove
-   ``min_final_share`` (60 %) of the excess the final model leaves without it, else the
-   weakest is dropped (``pruned``) and the check repeats.
+   chosen effect must still earn the band part of that rule beside the others and, where the
+   final model is within ``final_share_gap`` (2) of the noise, remove ``min_final_share``
+   (60 %) of the excess the model leaves without it, else the weakest is dropped (``pruned``)
+   and the check repeats.
 6. Verdict (:func:`verdict_of`) with the statuses below, each chosen effect's drop-one
    share, fitted parameters and standard errors, candidates that leave the same signature,
    and where in time the excess lies.
@@ -86,7 +87,8 @@ class DiagnosisSettings:
     min_excess_reduction : share of the current excess held-out misfit a new effect must remove.
     min_band_drop : that drop must also exceed this fraction of the noise band (chi^2 units).
     min_final_share : backward check: in the final model (two or more effects), dropping an
-        effect must raise the held-out chi^2 by this share of the excess left without it.
+        effect must raise the held-out chi^2 by this share of the excess left without it ...
+    final_share_gap : ... when the final model's held-out RMS over noise is at most this.
     explained_share, partly_share : shares of the excess separating the statuses.
     max_effects : at most this many effects are chosen.
     indistinguishable_margin : a candidate whose held-out excess reduction in the round an
@@ -119,6 +121,7 @@ class DiagnosisSettings:
     min_excess_reduction: float = 0.15
     min_band_drop: float = 0.5
     min_final_share: float = 0.6
+    final_share_gap: float = 2.0
     explained_share: float = 0.9
     partly_share: float = 0.3
     max_effects: int = 4

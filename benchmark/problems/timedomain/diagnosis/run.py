@@ -180,13 +180,6 @@ def render_markdown(doc: dict) -> str:
         for r in rnd["candidates"]:
             lines.append(f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
                          f"| {r['criterion']:.1f} | {'yes' if r['earns'] else 'no'} |")
-        if "basin" in rnd and not rnd["basin"]["holds_against_it"]:
-            b = rnd["basin"]
-            lines.append(f"\n{b['effect']} is not chosen: without it, the set refitted from the joint fit reaches "
-                         f"held-out chi^2 {b['heldout_chi2_set_refitted']:.3f}, against which it removes only "
-                         f"{100 * b['excess_reduction_against_it']:.1f} % of the excess, under the rule's share "
-                         "(the joint fit had found a better fit of the same set); the selection goes on from "
-                         "that refit.")
     lines += ["", "Noise estimated from the data: "
               + "; ".join(f"{k} {v['std']:.3g} (+-{100 * v['rel_uncertainty']:.0f} %, {v['method']})"
                           for k, v in doc["noise"].items()),
