@@ -101,15 +101,14 @@ def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None,
     short to show a slow drift, which it cannot tell from an offset) and from the segment itself.
 
     * pre-trigger (``pretrigger_end - guard >= 50`` samples): their mean. The channel is truly
-      zero there (motor at rest, supply off); accuracy ``sigma sqrt(g(0) / N)``, ``g(0) =
-      (1 + phi)/(1 - phi)`` for AR(1) noise of std sigma: 0.02 V for 0.5 V white noise and
-      500 samples. A drift between pre-trigger and run is not seen.
+      zero there (motor at rest, supply off); accuracy ``long_run_std / sqrt(N)`` (0.02 V for
+      0.5 V white noise and 500 samples). A drift between pre-trigger and run is not seen.
     * else the steady tail (last ``tail_s`` s, default the last third, trimmed to a whole
       number of periods of f0): the constant of a least-squares fit of the harmonics of f0
       with linear envelopes (a grid or inverter supply, and the currents of a machine at steady
       speed, have no DC over whole periods; the envelope terms absorb the last of a
-      start-up's decay and a frequency error of a few 1e-3). Same noise accuracy with N the
-      tail length (0.007 V for 5000 samples); a non-periodic remnant (an unfinished start,
+      start-up's decay and a frequency error of a few 1e-3). Same accuracy with N the tail
+      length (0.007 V for 5000 samples of white noise); a non-periodic remnant (an unfinished start,
       interharmonics) leaks in. ``f0`` (Hz) is estimated from the zero crossings of
       ``f0_from`` (default ``x``) when None.
 
