@@ -68,8 +68,9 @@ def _floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
     from. A coarse speed step with little dither sits on one or two levels at standstill and at
     steady state (the estimate sees almost nothing), while the run-up crosses every level and
     leaves its full quantisation error in the residual (independent plant, a 0.186 rad/s step
-    with 0.016 rad/s of white noise: estimated 0.0196 from the steady state, 0.056 in the record,
-    and an effect-free start was called ``unexplained``)."""
+    with 0.016 rad/s of white noise: the steady state gave only the 1e-4 floor, 0.013 rad/s,
+    the run-up's residual holds q/sqrt(12) = 0.054, and an effect-free start was called
+    ``unexplained``)."""
     q = quantum(x)
     std = max(est.std, q / math.sqrt(12.0), floor)
     if std == est.std:
