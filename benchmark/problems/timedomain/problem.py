@@ -175,11 +175,18 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         a constant + linear trend + every harmonic of the supply frequency below Nyquist (at most
         200) fitted over the last
         quarter of the record (the steady state after the start; coloured noise stays in the
-        residual), else a Savitzky-Golay fit of the whole channel. A noise-free record gets a floor
-        of 1e-7 of the channel's RMS."""
+        residual). Where that quarter holds fewer than ``2 * PERIODS_PER_BLOCK`` supply periods
+        (a short record), the diagnosis's estimate (:func:`~benchmark.problems.timedomain.
+        diagnosis.noise.startup_noise`: the pre-trigger, else the supply's harmonics with
+        drifting amplitudes over the steady state). A smoothing fit of a current is no noise
+        estimate: at 1 kHz on a 60 Hz supply a 21-sample window spans more than a period, and on
+        an independent-plant start of 0.4 s it put the current noise at 36 A (the truth: 0.4 A),
+        so the fit quality read "below the noise level". A noise-free record gets a floor of 1e-7
+        of the channel's RMS."""
         if self._noise is not None:
             return self._noise
-        from benchmark.core.uncertainty import NoiseEstimate, noise_from_smooth
+        from benchmark.core.uncertainty import NoiseEstimate
+        from benchmark.problems.timedomain.diagnosis.noise import startup_noise
 
         fs = 1.0 / self.dataset.sample_time
         out = []
@@ -187,6 +194,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             n = len(i_a)
             tail = slice(int(0.75 * n), n)
             f0 = _supply_frequency(v_a[tail], v_b[tail], self.dataset.sample_time) or self.dataset.supply_frequency
+            short: dict | None = None
             ests = []
             for c, x in enumerate((i_a, i_b, w)):
                 if c == 2 and not self.speed_measured:
@@ -199,10 +207,11 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
                 except (ValueError, np.linalg.LinAlgError, FloatingPointError):
                     est = None
                 if est is None:
-                    try:
-                        est = noise_from_smooth(x, 21)
-                    except ValueError:
-                        est = None
+                    if short is None:
+                        short = startup_noise(np.arange(n) / fs, v_a, v_b, i_a, i_b,
+                                              w if self.speed_measured else None,
+                                              float(f0 or self.dataset.supply_frequency))
+                    est = short.get(("i_alpha", "i_beta", "speed")[c])
                 if est is not None:
                     floor = 1e-7 * float(np.sqrt(np.mean(x**2)))
                     if not est.std > floor:
