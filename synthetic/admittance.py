@@ -23,7 +23,8 @@ Unmodelled effects (``run.effects``, ``effect_size``, ``effect_form``; the catal
 :mod:`benchmark.problems.admittance.effects`): with ``effects`` named, the data hold exactly those effects on the
 preset's bare 6-parameter machine (its ``R1sigma``, ``R2sigma``, ``X3`` and its warming, which are catalogue
 effects themselves, are removed first); ``effects=[none]`` is the bare machine. The sweep is then computed on
-the generalised circuit :class:`benchmark.problems.admittance.sweep_circuit.SweepCircuit` (torque from the air-gap power),
+the generalised circuit :class:`benchmark.problems.admittance.sweep_circuit.SweepCircuit` (torque from the
+air-gap power),
 and ``temperature_drift`` turns the warming on with the heating scale set to give its temperature rise.
 Without ``effects`` the preset is used as it is (Lindsay and Barton's model F, warming on).
 

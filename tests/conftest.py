@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from hypothesis import settings
 from hydra import compose, initialize_config_dir
+from hypothesis import settings
 
 from benchmark.problems.timedomain.motor import InductionMotor
 from benchmark.problems.timedomain.protocol import StartupStopTest, run_startup_stop

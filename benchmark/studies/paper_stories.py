@@ -53,7 +53,8 @@ def story_stop(figdir: Path) -> list[str]:
         lines.append(f"| case {case} ({'no Coulomb' if case == 1 else 'with Coulomb'}) | {est.tau_m:.3f} | "
                      f"{est.fc_over_J:.4f} | {rms:.2f} | {paper[case]} |")
         ax.plot(tt + est.t_free, model, lw=1.5,
-                label=f"case {case}: tau_m = {est.tau_m:.2f} s" + (f", fc/J = {est.fc_over_J:.2f}" if case == 2 else ""))
+                label=f"case {case}: tau_m = {est.tau_m:.2f} s"
+                + (f", fc/J = {est.fc_over_J:.2f}" if case == 2 else ""))
     ax.set_xlabel("time from supply removal (s)")
     ax.set_ylabel("speed (rad/s)")
     ax.set_title("Free stop: exponential (case 1) vs Coulomb + viscous (case 2)")

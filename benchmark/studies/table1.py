@@ -73,7 +73,8 @@ def render(rows: list[dict], overrides: list[str], n_seeds: int) -> str:
         if not sel:
             continue
         title = "GENESIS then polish (SciPy least squares)" if polish else "GENESIS alone"
-        out += [f"## {title}", "", "| seed | " + " | ".join(NAMES) + " | cost | evaluations | wall s | all within 1.3 % |",
+        out += [f"## {title}", "",
+                "| seed | " + " | ".join(NAMES) + " | cost | evaluations | wall s | all within 1.3 % |",
                 "|---|" + "---|" * (len(NAMES) + 4)]
         errs = []
         for r in sel:
@@ -82,7 +83,8 @@ def render(rows: list[dict], overrides: list[str], n_seeds: int) -> str:
             ok = bool(np.all(np.abs(e) <= PAPER_TOLERANCE))
             fmt = "{:+.1e} %" if polish else "{:+.3f} %"
             out.append(f"| {r['seed']} | " + " | ".join(fmt.format(100 * v) for v in e)
-                       + f" | {r['cost']:.5g} | {r['evaluations']} | {r['wall_time_s']:.1f} | {'yes' if ok else 'no'} |")
+                       + f" | {r['cost']:.5g} | {r['evaluations']} | {r['wall_time_s']:.1f} | "
+                       + f"{'yes' if ok else 'no'} |")
         E = np.array(errs)
         med = np.median(np.abs(E), axis=0)
         fmt = "{:.1e} %" if polish else "{:.3f} %"

@@ -4,7 +4,8 @@ The README's ```bash blocks are read in order and each command is run with bash 
 repository (what it writes, outputs/, data/, bench/, runs/, is git-ignored), in the order a
 newcomer would type them, since later commands read what earlier ones wrote. It takes several
 minutes (identifications and diagnoses), so it is a script run before a release, not part of the
-test suite. Skipped, and said so here: commands whose comment says they take minutes (marked ``(minutes)`` in the README),
+test suite. Skipped, and said so here: commands whose comment says they take minutes (marked
+``(minutes)`` in the README),
 the two installs (CI runs exactly those, .ci/run), and SLURM (no cluster here).
 """
 
@@ -15,7 +16,6 @@ import re
 import shutil
 import subprocess
 from pathlib import Path
-
 
 REPO = Path(__file__).resolve().parents[2]
 SKIP = ("(minutes)", "pip install", "imbench_slurm", "hydra/launcher=submitit")

@@ -38,7 +38,8 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
 ``load_torque``
     A load torque on the shaft. Size: the load torque over ``T_acc`` (the mean torque that
     accelerates the rotor to its final speed, :attr:`EffectContext.torque_scale
-    <benchmark.core.effects.EffectContext.torque_scale>`; about 1-2 times rated torque), 0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
+    <benchmark.core.effects.EffectContext.torque_scale>`; about 1-2 times rated torque),
+    0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
     (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
     (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record). One
     augmentation fits all three: extras ``load_const``, ``load_quad``, ``load_step`` (over

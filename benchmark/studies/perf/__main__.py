@@ -276,7 +276,8 @@ def _run_probe(probe: str, args: list[str], cache_dir: str, threads: int | None 
     if threads is not None:
         env["NUMBA_NUM_THREADS"] = str(threads)
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "benchmark.studies.perf.probes", probe, *args], env=env, cwd=str(ROOT), capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "benchmark.studies.perf.probes", probe, *args], env=env,
+                          cwd=str(ROOT), capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         raise RuntimeError(f"probe failed ({proc.returncode}): {proc.stderr[-2000:]}")

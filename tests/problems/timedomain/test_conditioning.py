@@ -71,9 +71,9 @@ def test_hard_clipped_current_samples_are_masked(tmp_path):
 
 
 def test_a_clean_synthetic_record_is_left_as_it_is(tmp_path):
-    from tests.conftest import compose_config
     from benchmark.core.harness import load_dataset
     from benchmark.problems.timedomain.conditioning import condition_dataset
+    from tests.conftest import compose_config
 
     ds, _ = load_dataset(compose_config(["noise=noisy"]))
     out = condition_dataset(ds)

@@ -11,8 +11,8 @@ import pytest
 
 from benchmark.core.harness import build_problem, run
 from benchmark.core.polish import polish_least_squares
-from benchmark.problems.timedomain.mechanical import fit_free_stop
 from benchmark.problems.timedomain.bounds import derive_bounds
+from benchmark.problems.timedomain.mechanical import fit_free_stop
 from tests.conftest import PAPER_MOTOR, compose_config
 
 
