@@ -1,0 +1,82 @@
+"""A stop record that is no free coast (:func:`benchmark.problems.timedomain.diagnosis.run.stop_record_check`).
+
+Independent plant (``synthetic.independent``): a 7.5 kW six-step start (a blind set, remade from
+its truth file), after which the inverter holds its zero vector. The stator is short-circuited and
+the trapped flux brakes the rotor to rest in about 0.2 s; the free-stop fit takes that for a free
+coast with a mechanical time constant of 15 ms, and a base model that takes ``tau_m`` and
+``fc/J`` from it ends with J far off (blind sets: a tenth to a twentieth of the truth, the
+diagnosis then `unexplained` at 47-99 times the noise). The start-up fitted alone finds J; the
+stop record is set aside and the diagnosis says so. A direct-on-line start of the same motor,
+whose stop is a free coast (the contactor opens), keeps its stop record.
+"""
+
+from __future__ import annotations
+
+import functools
+import warnings
+
+import pytest
+import yaml
+from hydra.utils import instantiate
+
+from benchmark.core.harness import identify
+from benchmark.problems.timedomain.conditioning import condition_dataset
+from benchmark.problems.timedomain.data import load_startup_dataset
+from benchmark.problems.timedomain.diagnosis import run as run_mod
+from benchmark.problems.timedomain.settings import TimeDomainSettings
+from synthetic.independent import make_dataset, make_spec, write_dataset
+from tests.conftest import compose_config
+
+#: The independent plant's blind set 12 of seed 1 (``python -m benchmark.blind source=plant seed=1``),
+#: as its truth file records it: a 7.5 kW six-step start with a current channel lagging 1.2 samples.
+BLIND_SIX_STEP = yaml.safe_load("""
+motor: simulink_7k5
+machine: {Rs: 0.8063453468076752, Rr: 0.7611111804870214, Lm: 0.10370105915100844, Lls: 0.0027235107033353988,
+          Llr: 0.00255431609786203, J: 0.03353502499802294, fv: 0.002392138248226537, fc: 0.3987307857062039}
+scenario: {kind: six_step, Ed: 513.0, Nc: 40, cycles: 70}
+sample_rate: 12000.0
+oversampling: 10
+effects:
+- {name: channel_delay, form: current_lag, unit: samples, size: 1.1983375094808533}
+noise: {current_white: 0.18961844372523037, current_colored: 0.00042719284938360367,
+        current_pole: 0.9899980638496564, current_quantum: 0.02176113340016184, voltage_white: 0.7123161385041933,
+        voltage_quantum: 0.0, speed_white: 0.07748741742311019, speed_quantum: 0.012680635528855302,
+        speed_ripple: 0.02631099958847152, ripple_order: 9}
+sensors: {has_speed: true, has_torque: true}
+stop: {duration: 7.848013569122768, sample_time: 0.001}
+meta: {nameplate: true, dc_resistance: true}
+seed: 1990588939
+""")
+
+
+def _base(tmp_path, scenario):
+    spec = BLIND_SIX_STEP if scenario == "blind" else make_spec("simulink_7k5", scenario, [], seed=1, duration=0.8,
+                                                                  stop=3.0)
+    made = make_dataset(spec)
+    ds = condition_dataset(load_startup_dataset(write_dataset(made, tmp_path / scenario)))
+    cfg = compose_config([f"data.path={tmp_path / scenario}"], name="diagnose")  # its budgets
+    ident = functools.partial(identify, plugin=instantiate(cfg.optimizer.plugin), budget=int(cfg.budget),
+                              name=str(cfg.optimizer.name), polish_budget=int(cfg.polish_budget))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est, used_ds, record = run_mod.identify_base(TimeDomainSettings(), ds, 2, ident, seed=0)
+    return est, used_ds, record, made.truth["parameters"]
+
+
+def test_a_braking_stop_is_set_aside_and_the_start_up_finds_J(tmp_path):
+    est, used_ds, record, truth = _base(tmp_path, "blind")
+    sr = record["stop_record"]
+    assert not sr["used"] and sr["ratio"] < 1.0 / run_mod.STOP_INERTIA_CONFLICT, sr
+    assert used_ds.stops == []
+    assert est["J"] == pytest.approx(truth["J"], rel=0.05)
+    assert sr["J_with_stop"] < 0.5 * truth["J"]  # what the base would have been
+    assert any(line.startswith("Stop record set aside") for line in run_mod.base_identification_lines(record))
+
+
+def test_a_free_coast_keeps_its_stop_record(tmp_path):
+    est, used_ds, record, truth = _base(tmp_path, "dol")
+    sr = record["stop_record"]
+    assert sr["used"] and 0.9 < sr["ratio"] < 1.1, sr
+    assert len(used_ds.stops) == 1
+    assert est["J"] == pytest.approx(truth["J"], rel=0.05)
+
