@@ -98,7 +98,8 @@ def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, p
     not (the start-up alone was the closer to the truth at both ends); on five independent-plant
     7.5 kW six-step starts followed by a zero vector they differed 6-19 fold (J with the stop
     0.05-0.16 of the truth, the start-up alone 0.96-1.00), and three of those five had been
-    diagnosed `unexplained` at 47-99 times the noise."""
+    diagnosed `unexplained` at 47-99 times the noise. A later draw flagged a sixth such start,
+    with a fan load at 56 % of rated torque (ratio 0.34, J with the stop 0.33 of the truth)."""
     if ds is None or not ds.stops or ds.inertia is not None or settings.known_inertia is not None:
         return None
     alone = problem_from_dataset(settings, dataclasses.replace(ds, stops=[]), truth=None)
