@@ -26,6 +26,19 @@ def compose_config(overrides=(), name: str = "config"):
         return compose(name, overrides=list(overrides))
 
 
+def identify_folder(folder, outdir) -> dict:
+    """The default identification (``python -m benchmark data.path=folder``, no figures, no
+    checkpoint, no progress bar) of a data folder, its warnings silenced; returns the result record."""
+    import warnings
+
+    from benchmark.core.harness import run
+
+    cfg = compose_config([f"data.path={folder}", "figures=false", "checkpoint=false", "progress=false"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return run(cfg, outdir).record
+
+
 @pytest.fixture(scope="session")
 def paper_motor():
     return PAPER_MOTOR

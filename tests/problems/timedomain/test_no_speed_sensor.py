@@ -6,27 +6,15 @@ says)."""
 
 from __future__ import annotations
 
-import warnings
-from pathlib import Path
-
-from hydra import compose, initialize_config_dir
-
-from benchmark.core.harness import run
 from synthetic.independent import make_dataset, make_spec, write_dataset
-
-CONF = Path(__file__).resolve().parents[3] / "conf"
+from tests.conftest import identify_folder
 
 
 def test_unloaded_start_without_speed_sensor(tmp_path):
     spec = make_spec("paper_1kw", "dol", [], seed=3, duration=0.5, has_speed=False)
     folder = write_dataset(make_dataset(spec), tmp_path / "nospeed")
     assert "speed" not in (folder / "startup.csv").read_text().splitlines()[0]
-    with initialize_config_dir(config_dir=str(CONF), version_base=None):
-        cfg = compose("config", overrides=[f"data.path={folder}", "figures=false", "checkpoint=false",
-                                           "progress=false"])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rec = run(cfg, tmp_path / "run").record
+    rec = identify_folder(folder, tmp_path / "run")
     err, se = rec["rel_error"], rec["standard_error"]
     for k in ("Rs", "Ls", "Le", "Rr"):
         assert abs(err[k]) < 0.03, (k, err[k])

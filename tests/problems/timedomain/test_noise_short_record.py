@@ -21,17 +21,12 @@ too), so the fit quality reads near the noise level, not a hundredth of it.
 from __future__ import annotations
 
 import copy
-import warnings
-from pathlib import Path
 
 import numpy as np
-from hydra import compose, initialize_config_dir
 
-from benchmark.core.harness import run
 from benchmark.problems.timedomain.data import load_startup_dataset
 from synthetic.independent import make_dataset, make_spec, write_dataset
-
-CONF = Path(__file__).resolve().parents[3] / "conf"
+from tests.conftest import identify_folder
 
 
 def test_a_short_slowly_sampled_record_gets_its_current_noise_right(tmp_path):
@@ -42,12 +37,7 @@ def test_a_short_slowly_sampled_record_gets_its_current_noise_right(tmp_path):
     folder = write_dataset(make_dataset(spec), tmp_path / "short")
     noisy = load_startup_dataset(folder).startups[0]
     clean = load_startup_dataset(write_dataset(make_dataset(clean_spec), tmp_path / "clean")).startups[0]
-    with initialize_config_dir(config_dir=str(CONF), version_base=None):
-        cfg = compose("config", overrides=[f"data.path={folder}", "figures=false", "checkpoint=false",
-                                           "progress=false"])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rec = run(cfg, tmp_path / "run").record
+    rec = identify_folder(folder, tmp_path / "run")
     for ch in ("i_alpha", "i_beta"):
         true = float(np.std(getattr(noisy, ch) - getattr(clean, ch)))
         q = rec["fit_quality"][ch]
