@@ -180,7 +180,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         diagnosis.noise.startup_noise`: the pre-trigger, else the supply's harmonics with
         drifting amplitudes over the steady state). A smoothing fit of a current is no noise
         estimate: at 1 kHz on a 60 Hz supply a 21-sample window spans more than a period, and on
-        an independent-plant start of 0.4 s it put the current noise at 36 A (the truth: 0.4 A),
+        an independent-plant start of 0.4 s it put the current noise at 36 A (the truth: 0.17 A),
         so the fit quality read "below the noise level". A noise-free record gets a floor of 1e-7
         of the channel's RMS."""
         if self._noise is not None:

@@ -70,9 +70,9 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
         raise ConfigError(f"optimizer: the base identification failed ({ident.result.message})")
     check = stop_record_check(settings, ds, problem, ident, identify, int(seed))
     if check is not None:
-        record["stop_record"] = {k: v for k, v in check.items() if not k.startswith("_")}
-        if not check["used"]:
-            problem, ident = check["_problem"], check["_ident"]
+        record["stop_record"], alone, ident_alone = check
+        if not record["stop_record"]["used"]:
+            problem, ident = alone, ident_alone
     x = ident.x
     refined = refine_nuisance(problem, x, ident.cost)
     if refined is not None and refined.accepted:
@@ -84,12 +84,13 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
 
 
 def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, problem, ident,
-                      identify: Callable, seed: int) -> dict | None:
+                      identify: Callable, seed: int) -> tuple[dict, object, object] | None:
     """Whether the stop record is a free coast of the machine the start-up shows: the start-up
     fitted alone (``fv`` and ``fc`` searched, one seed) must find a J within a factor
     :data:`STOP_INERTIA_CONFLICT` of the J of the fit that takes ``tau_m`` and ``fc/J`` from the
     stop record; else the stop record is set aside (``used`` False, and the start-up-alone fit
-    becomes the base). None when there is no stop record or J is not searched.
+    becomes the base). Returns the record of the check, the start-up-alone problem and its
+    identification; None when there is no stop record or J is not searched.
 
     An inverter that holds its zero vector after the start short-circuits the stator: the
     trapped flux brakes the rotor to rest within a few rotor time constants, and the free-stop
@@ -109,8 +110,8 @@ def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, p
     j_stop, j_alone = float(problem.estimate(ident.x)["J"]), float(alone.estimate(ident_alone.x)["J"])
     ratio = j_stop / j_alone if j_alone > 0 else math.inf
     used = bool(1.0 / STOP_INERTIA_CONFLICT <= ratio <= STOP_INERTIA_CONFLICT)
-    return {"used": used, "J_with_stop": j_stop, "J_start_alone": j_alone, "ratio": ratio,
-            "start_alone_cost": float(ident_alone.cost), "_problem": alone, "_ident": ident_alone}
+    return ({"used": used, "J_with_stop": j_stop, "J_start_alone": j_alone, "ratio": ratio,
+             "start_alone_cost": float(ident_alone.cost)}, alone, ident_alone)
 
 
 def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify: Callable,
