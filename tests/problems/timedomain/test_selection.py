@@ -121,15 +121,19 @@ def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_loa
     28.8). The document says so (``held_by_base``), and the blind score counts the load as named."""
     from benchmark.analysis.blind import score_row
     from benchmark.core.effects import EffectContext
-    from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, held_by_base
+    from benchmark.problems.timedomain.diagnosis.pipeline import (DiagnosisSettings, estimated_rated_torque,
+                                                                   held_by_base)
 
     ctx = EffectContext(w_e=314.16, V1=326.6, I_peak=120.0, w_sync=157.08, dc_link_voltage=0.0, E_cu=1.0,
-                        L_M=0.12, L_sigma=0.006, T_acc=60.0)
+                        L_M=0.12, L_sigma=0.006, pole_pairs=2, T_acc=60.0)
     names, st = ["Rs", "Ls", "Le", "Rr", "J", "fv", "fc"], DiagnosisSettings()
     x = np.array([0.8, 0.127, 0.0064, 0.75, 0.027, 0.001, 29.0])
     held = held_by_base(names, x, ctx, st)
     assert [(h["effect"], h["form"]) for h in held] == [("load_torque", "constant")]
-    assert abs(held[0]["share_of_scale"] - 29.0 / 60.0) < 1e-12
+    # without a nameplate the scale is a third of the pull-out torque, 3 p V1^2 / (4 w_e (Rs + |Rs + j w_e Le|))
+    pullout = 3 * 2 * 326.6**2 / (4 * 314.16 * (0.8 + np.hypot(0.8, 314.16 * 0.0064)))
+    assert abs(pullout - 171.8) < 0.1
+    assert abs(held[0]["share_of_scale"] - 29.0 / (pullout / 3)) < 1e-12
     # with a nameplate the rated torque is the scale (a slow ramped start makes T_acc small)
     from benchmark.problems.timedomain.diagnosis.pipeline import rated_torque
 
@@ -139,8 +143,16 @@ def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_loa
     x_small[-1] = 0.015 * rated  # 1.5 % of rated: friction, though 1.2 % of a small T_acc would pass too
     assert held_by_base(names, x_small, ctx, st, rated) == []
     assert held_by_base(names, x, ctx, st, rated)[0]["scale"] == "rated torque"
-    x[-1] = 0.02 * 60.0  # 2 % of T_acc: a motor's own friction, nothing to report
+    x[-1] = 0.02 * pullout / 3  # 2 % of the estimated rated torque: a motor's own friction, nothing to report
     assert held_by_base(names, x, ctx, st) == []
+    # a slow inverter ramp (blind plant seed 17, set 3: a 7.5 kW 6-pole motor, 0.63 s ramp, rated
+    # torque 61 N m): its own friction, 0.61 N m, was 5 % of T_acc (12.1 N m) and was reported as
+    # a load; it is 1 % of the estimated rated torque (62.3 N m)
+    slow = EffectContext(w_e=377.0, V1=179.6, I_peak=300.0, w_sync=125.7, dc_link_voltage=297.0, E_cu=1.0,
+                         L_M=0.031, L_sigma=0.00185, pole_pairs=3, T_acc=12.06)
+    fitz = np.array([0.2778, 0.03278, 0.001853, 0.1457, 0.0844, 0.0038, 0.6121])
+    assert held_by_base(names, fitz, slow, st) == []
+    assert abs(estimated_rated_torque(names, fitz, slow) - 62.33) < 0.01
     assert held_by_base(names[:-1], x[:-1], ctx, st) == []  # case-1 base: no fc in it
     doc = {"status": "unexplained", "verdict": "unexplained", "effects": [], "explained_share": 0.0,
            "gap_before": {"heldout_rms_over_noise": 1.13}, "gap_after": {"heldout_rms_over_noise": 1.13},

@@ -66,8 +66,8 @@ from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noi
 from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 
-__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "friction_scale", "held_by_base",
-           "localise", "rated_torque", "screen", "verdict_of"]
+__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "estimated_rated_torque", "friction_scale",
+           "held_by_base", "localise", "pullout_torque", "rated_torque", "screen", "verdict_of"]
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
 HARMONIC_ORDERS = (-11, -7, -5, -1, 1, 5, 7, 11, 13)
@@ -108,9 +108,8 @@ class DiagnosisSettings:
         pulled far off by the unmodelled effects (a stator resistance three times its DC value)
         must stay inside the box, or the augmented model can never return to the motor.
     load_friction_share : a case-2 base whose Coulomb friction exceeds this share of the rated
-        torque (nameplate), or without a nameplate of ``T_acc`` (the torque scale of
-        :class:`~benchmark.core.effects.EffectContext`, 1-2 times rated torque on a direct start)
-        holds a constant load torque: an induction motor's own friction is 0.3-2 % of
+        torque (nameplate), or without a nameplate of the rated torque estimated from the base
+        model's pull-out torque (:func:`estimated_rated_torque`) holds a constant load torque: an induction motor's own friction is 0.3-2 % of
         its rated torque, a constant passive load has the same equation, so the record cannot
         tell them apart; the document then lists ``load_torque`` under ``held_by_base``.
     voltage_noise : with measured continuous voltages (``input_hold: linear``), each channel's
@@ -151,13 +150,41 @@ def rated_torque(nameplate: dict | None) -> float | None:
     return float(nameplate["rated_power"]) / (float(nameplate["speed"]) * 2.0 * np.pi / 60.0)
 
 
+#: Pull-out over rated torque of the motor whose rated torque :func:`estimated_rated_torque`
+#: guesses: induction motors have 2-3.5 (IEC, NEMA design B; the validation motors 2.3-4.9).
+PULLOUT_OVER_RATED = 3.0
+
+
+def pullout_torque(Rs: float, Le: float, ctx) -> float:
+    """The base model's pull-out (breakdown) torque at the record's final supply, N m:
+    ``3 p V1^2 / (4 w_e (Rs + sqrt(Rs^2 + (w_e Le)^2)))`` with ``V1`` the fundamental phase
+    voltage amplitude (V), ``w_e`` its angular frequency (rad/s), ``Rs`` (ohm) and the leakage
+    ``Le`` (H); the magnetising branch is neglected (it lowers the torque by a few per cent)."""
+    w_e = float(ctx.w_e)
+    if w_e <= 0 or ctx.V1 <= 0:
+        return 0.0
+    return 3.0 * ctx.pole_pairs * ctx.V1**2 / (4.0 * w_e * (Rs + np.hypot(Rs, w_e * Le)))
+
+
+def estimated_rated_torque(names: list[str], x: np.ndarray, ctx) -> float:
+    """A rated torque (N m) for a record without a nameplate: the base model's pull-out torque
+    over :data:`PULLOUT_OVER_RATED`; 0 when the base model has no ``Rs`` and ``Le``. It is
+    within 0.75-1.6 times the rated torque of the validation motors, whatever their start (a
+    slow inverter ramp makes ``T_acc`` a fraction of the rated torque)."""
+    if "Rs" not in names or "Le" not in names:
+        return 0.0
+    return pullout_torque(float(x[names.index("Rs")]), float(x[names.index("Le")]), ctx) / PULLOUT_OVER_RATED
+
+
 def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettings,
                  rated: float | None = None) -> list[dict]:
     """Effects the base model already holds under another name: a Coulomb friction above
     ``settings.load_friction_share`` of the rated torque ``rated`` (N m, from the nameplate),
-    or without one of ``T_acc`` (which a slow ramped start makes small), is a constant
-    (passive) load torque."""
-    scale, label = (rated, "rated torque") if rated else (ctx.torque_scale, "torque scale T_acc")
+    or without one of :func:`estimated_rated_torque`, is a constant (passive) load torque."""
+    if rated:
+        scale, label = rated, "rated torque"
+    else:
+        scale, label = estimated_rated_torque(names, x, ctx), "rated torque estimated as 1/3 of the pull-out torque"
     if "fc" not in names or not scale or scale <= 0:
         return []
     fc = float(x[names.index("fc")])
