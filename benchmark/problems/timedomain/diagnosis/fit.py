@@ -184,7 +184,11 @@ class DiagnosisData:
 
 
 class JointModel:
-    """Base model (+ a list of effects) with the joint residual of :class:`DiagnosisData`."""
+    """Base model (+ a list of effects) with the joint residual of :class:`DiagnosisData`.
+
+    The local fits search the base parameters in a box about ``centre`` (``[c / span, c span]``;
+    ``fv`` in ``[0.1 fv, 5 fv + fc_scale / w_sync]``, ``fc`` in ``[0, 5 fc + fc_scale]``, with
+    ``fc_scale`` a torque, N m) and each effect's extras in its own bounds."""
 
     def __init__(self, data: DiagnosisData, base_case: int, effects: list[Effect] | tuple, ctx: EffectContext,
                  centre: dict[str, float], fc_scale: float, span: float = 2.0):
@@ -209,7 +213,7 @@ class JointModel:
         lo, hi = c / span, c * span  # the box the local fits search around the base estimate
         for j, n in enumerate(self.base_names):
             if n == "fv":
-                lo[j], hi[j] = 0.1 * c[j], 5.0 * c[j] + 1e-9
+                lo[j], hi[j] = 0.1 * c[j], 5.0 * c[j] + fc_scale / max(ctx.w_sync, 1e-9)
             if n == "fc":
                 lo[j], hi[j] = 0.0, 5.0 * c[j] + fc_scale
         for eff in self.effects:

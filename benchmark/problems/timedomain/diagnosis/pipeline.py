@@ -137,10 +137,22 @@ class DiagnosisSettings:
     voltage_noise: bool = True
 
 
+#: Share of the estimated rated torque (:func:`estimated_rated_torque`) that the local fits may
+#: always give the friction, whatever the base identification says.
+FRICTION_FLOOR_SHARE = 0.03
+
+
 def friction_scale(estimate: dict[str, float], ctx) -> float:
-    """Scale of the Coulomb friction's search range (N m): 0.3 of the viscous torque at
-    synchronous speed (``fc`` is searched in ``[0, 5 fc + this]``)."""
-    return 0.3 * estimate["fv"] * ctx.w_sync + 1e-9
+    """Scale of the friction's search range (N m): 0.3 of the viscous torque at synchronous
+    speed plus :data:`FRICTION_FLOOR_SHARE` of the estimated rated torque. ``fc`` is searched
+    in ``[0, 5 fc + this]``, ``fv`` up to ``5 fv + this / w_sync``. The floor keeps a friction
+    that the base identification put at zero free: a tachometer that reads above synchronous
+    speed pulls both to zero (the model then gets as close to it as it can), and a box of
+    ``[0, 5 x 0]`` would lock them there for every augmented model, so that a load torque
+    would be chosen to stand in for the motor's own friction."""
+    names = list(estimate)
+    rated = estimated_rated_torque(names, np.array([estimate[n] for n in names], float), ctx)
+    return 0.3 * estimate["fv"] * ctx.w_sync + FRICTION_FLOOR_SHARE * rated + 1e-9
 
 
 def rated_torque(nameplate: dict | None) -> float | None:
