@@ -121,8 +121,7 @@ def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_loa
     28.8). The document says so (``held_by_base``), and the blind score counts the load as named."""
     from benchmark.analysis.blind import score_row
     from benchmark.core.effects import EffectContext
-    from benchmark.problems.timedomain.diagnosis.pipeline import (DiagnosisSettings, estimated_rated_torque,
-                                                                   held_by_base)
+    from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, estimated_rated_torque, held_by_base
 
     ctx = EffectContext(w_e=314.16, V1=326.6, I_peak=120.0, w_sync=157.08, dc_link_voltage=0.0, E_cu=1.0,
                         L_M=0.12, L_sigma=0.006, pole_pairs=2, T_acc=60.0)

@@ -66,8 +66,8 @@ from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noi
 from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 
-__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "estimated_rated_torque", "friction_scale",
-           "held_by_base", "localise", "pullout_torque", "rated_torque", "screen", "verdict_of"]
+__all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "estimated_rated_torque",
+           "friction_scale", "held_by_base", "localise", "pullout_torque", "rated_torque", "screen", "verdict_of"]
 
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
 HARMONIC_ORDERS = (-11, -7, -5, -1, 1, 5, 7, 11, 13)
@@ -109,9 +109,10 @@ class DiagnosisSettings:
         must stay inside the box, or the augmented model can never return to the motor.
     load_friction_share : a case-2 base whose Coulomb friction exceeds this share of the rated
         torque (nameplate), or without a nameplate of the rated torque estimated from the base
-        model's pull-out torque (:func:`estimated_rated_torque`) holds a constant load torque: an induction motor's own friction is 0.3-2 % of
-        its rated torque, a constant passive load has the same equation, so the record cannot
-        tell them apart; the document then lists ``load_torque`` under ``held_by_base``.
+        model's pull-out torque (:func:`estimated_rated_torque`) holds a constant load torque:
+        an induction motor's own friction is 0.3-2 % of its rated torque, a constant passive
+        load has the same equation, so the record cannot tell them apart; the document then
+        lists ``load_torque`` under ``held_by_base``.
     voltage_noise : with measured continuous voltages (``input_hold: linear``), each channel's
         noise level includes the voltage's noise carried through the model (:mod:`.input_noise`).
     """
