@@ -25,7 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from benchmark.problems.timedomain.switch_on import REST_GUARD_S, current_departure, detect_switch_on
+from benchmark.problems.timedomain.switch_on import (
+    REST_GUARD_S,
+    current_departure,
+    detect_switch_on,
+    voltage_rises_before,
+)
 
 MIN_PRETRIGGER = 50  #: samples a pre-trigger needs before its mean is used as the offset
 
@@ -421,6 +426,10 @@ def condition_record(v, i, ts: float, speed=None, *, f0: float | None = None, p:
         # current flows well before the voltage's switch-on: the voltage was live (if low) from the start
         notes.append(f"currents leave their rest level at t = {k_rest * ts:.4f} s, before the voltage's "
                      f"switch-on at {k_on * ts:.4f} s (a live low voltage, e.g. a V/f boost): no pre-trigger")
+        k_on = None
+    elif voltage_rises_before(v, ts, k_on):
+        notes.append(f"the voltage's magnitude rises steadily before its switch-on at {k_on * ts:.4f} s (a live "
+                     f"low voltage, e.g. a V/f ramp from a boost voltage): no pre-trigger")
         k_on = None
     hard = [detect_clipping(x, clip_rel_tol) for x in i]
     masks = [detect_clipping(x, clip_rel_tol, ts=ts, f0=f0, start=k_on or 0) if soft else h

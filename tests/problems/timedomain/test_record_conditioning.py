@@ -196,6 +196,38 @@ def test_live_low_voltage_at_the_start_is_no_pre_trigger():
     assert abs(offs["i_r"]) < 0.1 and abs(offs["i_s"]) < 0.1, offs  # true offsets: 0
 
 
+def test_a_slow_vf_ramp_under_noisy_currents_is_no_pre_trigger():
+    """The independent plant's 1 kW PWM start (blind seed 15, set 20: a 0.41 s V/f ramp from a 2 %
+    boost, current noise 0.07 A white + 0.04 A coloured): the voltage reaches the 5 % contact
+    level only after 5 ms and the noisy currents do not leave their "rest" level by 8 sigma
+    before it. The conditioning took 0.5 A of start-up current for a probe offset (the
+    diagnosis then named ``sensor_offset`` beside the true load torque); the voltage's steady
+    rise through the stretch says it is live."""
+    from benchmark.problems.timedomain.switch_on import current_departure, voltage_rises_before
+    from synthetic.independent import make_dataset, make_spec
+
+    noise = dict(current_white=0.0732, current_colored=0.0429, current_pole=0.971, current_quantum=0.0164,
+                 voltage_white=0.896, voltage_quantum=0.0688, speed_white=0.0965, speed_quantum=0.110,
+                 speed_ripple=0.0418, ripple_order=11)
+    spec = make_spec("paper_1kw", "pwm", [], seed=0, duration=0.8, noise=noise)
+    spec["scenario"].update(boost=0.0209, ramp=0.406)
+    made = make_dataset(spec)
+    s, ts = made.startup, float(made.meta["sample_time"])
+    v, i = np.vstack([s["v_r"], s["v_s"], s["v_t"]]), np.vstack([s["i_r"], s["i_s"]])
+    k = detect_switch_on(v, ts)
+    assert k is not None and k >= 50  # long enough for a pre-trigger mean
+    assert current_departure(i, ts, k) is None  # the rest check alone misses it
+    assert np.mean(i[0, :k]) > 0.4  # the current the old conditioning removed as an offset
+    assert voltage_rises_before(v, ts, k)
+    _, rep = condition_record(v, i, ts, f0=50.0)
+    assert rep.switch_on is None
+    offs = {name: value for name, value, unit, how, se in rep.offsets}
+    assert abs(offs["i_r"]) < 0.05 and abs(offs["i_s"]) < 0.05, offs  # true offsets: 0
+    # a contactor's pre-trigger (offsets and noise up to the first contact) does not rise
+    v2, i2, _, _ = record()
+    assert not voltage_rises_before(v2, TS, detect_switch_on(v2, TS))
+
+
 def test_true_pre_trigger_is_kept_with_the_rest_check():
     v, i, _, _ = record()
     _, rep = condition_record(v, i, TS, f0=F0)
