@@ -12,6 +12,7 @@ whose stop is a free coast (the contactor opens), keeps its stop record.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import warnings
 
@@ -80,3 +81,35 @@ def test_a_free_coast_keeps_its_stop_record(tmp_path):
     assert len(used_ds.stops) == 1
     assert est["J"] == pytest.approx(truth["J"], rel=0.05)
 
+
+
+def test_a_start_up_alone_search_in_a_worse_basin_keeps_the_stop(tmp_path):
+    """The check's second condition (blind plant seed 18, set 3: a 7.5 kW PWM start whose
+    start-up-alone search ended with J at 0.16 of the truth while the fit with the stop had it
+    right): J apart by more than the factor, but the start-up-alone parameters fit the start-up
+    worse than those found with the stop, so the stop is kept. Here the searches are replaced by
+    their end points: the truth with the stop, the truth with J / 6 for the start-up alone."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from benchmark.problems.timedomain.problem import problem_from_dataset
+
+    spec = make_spec("simulink_7k5", "dol", [], seed=1, duration=0.8, stop=3.0)
+    made = make_dataset(spec)
+    ds = condition_dataset(load_startup_dataset(write_dataset(made, tmp_path / "dol")))
+    settings = dataclasses.replace(TimeDomainSettings(), friction_case=2, preset_bounds=None)
+    with_stop = problem_from_dataset(settings, ds, truth=None)
+    truth = dict(made.truth["parameters"])
+    ident = SimpleNamespace(x=np.array([truth[n] for n in with_stop.parameter_names]))
+
+    def search_in_a_worse_basin(problem, seed):
+        x = np.array([truth[n] / (6.0 if n == "J" else 1.0) for n in problem.parameter_names])
+        return SimpleNamespace(x=x, cost=float(problem.evaluate(x[None, :])[0]))
+
+    record, alone, ident_alone = run_mod.stop_record_check(settings, ds, with_stop, ident, search_in_a_worse_basin, 0)
+    assert record["ratio"] == pytest.approx(6.0, rel=1e-9)
+    assert record["start_cost_at_stop_fit"] < record["start_alone_cost"]
+    assert record["used"]
+    lines = run_mod.base_identification_lines({"agree": True, "runs": [], "stop_record": record})
+    assert any(line.startswith("Stop record kept") for line in lines)

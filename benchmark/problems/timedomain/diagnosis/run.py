@@ -16,6 +16,8 @@ import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+import numpy as np
+
 from benchmark.core.effects import load_effects
 from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
@@ -88,9 +90,12 @@ def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, p
     """Whether the stop record is a free coast of the machine the start-up shows: the start-up
     fitted alone (``fv`` and ``fc`` searched, one seed) must find a J within a factor
     :data:`STOP_INERTIA_CONFLICT` of the J of the fit that takes ``tau_m`` and ``fc/J`` from the
-    stop record; else the stop record is set aside (``used`` False, and the start-up-alone fit
-    becomes the base). Returns the record of the check, the start-up-alone problem and its
-    identification; None when there is no stop record or J is not searched.
+    stop record; else, when the start-up alone is also fitted better by the start-up-alone
+    parameters than by those found with the stop, the stop record is set aside (``used`` False,
+    and the start-up-alone fit becomes the base). A start-up-alone search that stopped in a
+    worse basin (blind plant seed 18, set 3: J 0.16 of the truth, the stop's J right) keeps the
+    stop. Returns the record of the check, the start-up-alone problem and its identification;
+    None when there is no stop record or J is not searched.
 
     An inverter that holds its zero vector after the start short-circuits the stator: the
     trapped flux brakes the rotor to rest within a few rotor time constants, and the free-stop
@@ -107,11 +112,18 @@ def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, p
     ident_alone = identify(alone, seed=seed)
     if ident_alone.x is None:
         return None
-    j_stop, j_alone = float(problem.estimate(ident.x)["J"]), float(alone.estimate(ident_alone.x)["J"])
+    with_stop = problem.estimate(ident.x)
+    j_stop, j_alone = float(with_stop["J"]), float(alone.estimate(ident_alone.x)["J"])
     ratio = j_stop / j_alone if j_alone > 0 else math.inf
-    used = bool(1.0 / STOP_INERTIA_CONFLICT <= ratio <= STOP_INERTIA_CONFLICT)
+    # the start-up's own cost at the parameters found with the stop: a start-up-alone search that
+    # stopped in a worse basin than those parameters is no evidence against the stop record
+    x_with_stop = np.array([[with_stop[n] for n in alone.parameter_names]])
+    cost_with_stop = float(alone.evaluate(x_with_stop)[0])
+    cost_alone = float(alone.evaluate(np.atleast_2d(ident_alone.x))[0])
+    conflict = not 1.0 / STOP_INERTIA_CONFLICT <= ratio <= STOP_INERTIA_CONFLICT
+    used = bool(not conflict or cost_with_stop <= cost_alone)
     return ({"used": used, "J_with_stop": j_stop, "J_start_alone": j_alone, "ratio": ratio,
-             "start_alone_cost": float(ident_alone.cost)}, alone, ident_alone)
+             "start_alone_cost": cost_alone, "start_cost_at_stop_fit": cost_with_stop}, alone, ident_alone)
 
 
 def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify: Callable,
@@ -146,7 +158,7 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
 
 def base_identification_lines(bi: dict | None) -> list[str]:
     """What diagnosis.md says about the base identification: seeds that ended apart, a stop
-    record set aside."""
+    record set aside (or kept although the start-up alone found another J)."""
     lines: list[str] = []
     if bi and not bi["agree"]:
         costs = ", ".join(f"seed {r['seed']}: {r['cost']:.6g}" for r in bi["runs"])
@@ -160,6 +172,12 @@ def base_identification_lines(bi: dict | None) -> list[str]:
                      f"{STOP_INERTIA_CONFLICT:g} apart). The stop record is no free coast of this machine (an "
                      "inverter holding a zero vector brakes it, or a brake, or another load): the diagnosis uses "
                      "the start-up alone, with fv and fc searched.")
+    elif sr and not 1.0 / STOP_INERTIA_CONFLICT <= sr["ratio"] <= STOP_INERTIA_CONFLICT:
+        lines.append(f"Stop record kept: the start-up alone found J = {sr['J_start_alone']:.4g} kg m^2 against "
+                     f"{sr['J_with_stop']:.4g} with the stop ({sr['ratio']:.3g} times), but it fits the start-up "
+                     f"worse than the parameters found with the stop do (cost {sr['start_alone_cost']:.6g} "
+                     f"against {sr.get('start_cost_at_stop_fit', math.nan):.6g}): that search stopped in another "
+                     "basin.")
     return lines
 
 
