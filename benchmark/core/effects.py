@@ -140,6 +140,19 @@ class Effect:
         speed per candidate) for extra-parameter rows (n, k). Identity unless a sensor effect."""
         return sim
 
+    def measure_stop(self, w: np.ndarray, extras: np.ndarray, ctx: EffectContext, t: np.ndarray,
+                     measured: np.ndarray) -> np.ndarray:
+        """What the speed sensor records of the free stop's speed ``w`` (n, N, rad/s) at times ``t``
+        (N, s from the stop's start; ``measured`` (N,) the recorded stop speed, for nuisances
+        the effect profiles out per record). Identity unless the effect acts on the speed sensor."""
+        return w
+
+    def stop_true_speed(self, w: np.ndarray, extras: np.ndarray, ctx: EffectContext) -> np.ndarray:
+        """The true speed (n, N) from a recorded stop speed ``w`` (n, N): the inverse of
+        :meth:`measure_stop`'s deterministic part (nuisances it profiles out are left in).
+        Identity by default."""
+        return w
+
     # plant (sensor side)
     def plant_extras(self, size: float, ctx: EffectContext, form: dict | None = None) -> np.ndarray | None:
         """Extra parameters (k,) with which the plant applies :meth:`measure` at ``size``

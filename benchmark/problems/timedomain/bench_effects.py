@@ -189,6 +189,30 @@ class SpeedSensorGain(Effect):
         out[:, 2] = w * (1.0 + extras[:, 0:1] + ripple) + extras[:, 1:2] * ctx.w_sync
         return out
 
+    def measure_stop(self, w, extras, ctx, t, measured):
+        """The same tachometer on the free stop: gain and offset as on the start-up, the ripple
+        with the start-up's amplitude ``hypot(a, b)`` and its phase profiled out (the stop
+        record's shaft angle at its start is unknown: the phase is the one that fits
+        ``measured`` best, in closed form, for each candidate)."""
+        extras = np.atleast_2d(extras)
+        dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+        theta = np.cumsum(np.nan_to_num(w), axis=1) * dt
+        base = w * (1.0 + extras[:, 0:1]) + extras[:, 1:2] * ctx.w_sync
+        sw, cw = w * np.sin(theta), w * np.cos(theta)
+        with np.errstate(all="ignore"):
+            r0 = np.nan_to_num(np.asarray(measured, float)[None, :] - base)
+            S = np.sum(r0 * np.nan_to_num(sw), axis=1, keepdims=True)
+            C = np.sum(r0 * np.nan_to_num(cw), axis=1, keepdims=True)
+            norm = np.hypot(S, C)
+            cos_psi = np.where(norm > 0, S / np.where(norm > 0, norm, 1.0), 1.0)
+            sin_psi = np.where(norm > 0, C / np.where(norm > 0, norm, 1.0), 0.0)
+        rho = np.hypot(extras[:, 2:3], extras[:, 3:4])
+        return base + rho * (cos_psi * sw + sin_psi * cw)
+
+    def stop_true_speed(self, w, extras, ctx):
+        extras = np.atleast_2d(extras)
+        return (w - extras[:, 1:2] * ctx.w_sync) / (1.0 + extras[:, 0:1])
+
     def applies_to(self, facts):
         if not facts.get("has_speed", True):
             return "the record has no speed channel"

@@ -80,28 +80,35 @@ def steady_tail(i: np.ndarray, ts: float, f0: float, periods: int = 5) -> bool:
 
 def condition_dataset(ds: StartupDataset) -> StartupDataset:
     """The data set with every start-up record conditioned (see the module docstring)."""
-    records, lines, removed = [], [], []
+    records, lines, removed, speed_offsets = [], [], [], []
     for k, rec in enumerate(ds.startups):
         name = f"startup record {k + 1}" if len(ds.startups) > 1 else "start-up record"
-        new, said, found = condition_startup(rec, ds.sample_time, ds.pole_pairs, ds.supply_frequency,
-                                      measured_voltage=ds.input_hold != "zoh",
-                                      continuous_voltage=ds.input_hold == "linear" and not ds.chord_voltage)
+        new, said, found, speed_offset = condition_startup(
+            rec, ds.sample_time, ds.pole_pairs, ds.supply_frequency, measured_voltage=ds.input_hold != "zoh",
+            continuous_voltage=ds.input_hold == "linear" and not ds.chord_voltage)
         records.append(new)
         lines += [f"{name}: {s}" for s in said]
         removed += [e for e in found if e not in removed]
+        speed_offsets.append(speed_offset)
+    stops = list(ds.stops)
+    if stops and len(speed_offsets) == 1 and speed_offsets[0] != 0.0:
+        # the same tachometer records the free stop: its rest offset is there too
+        stops = [replace(st, speed=np.asarray(st.speed, float) - speed_offsets[0]) for st in stops]
+        lines.append(f"stop record: the start-up's speed offset {speed_offsets[0]:+.4g} rad/s removed (same sensor)")
     # restored samples are what the model's linear interpolation must see: written back, they
     # are not restored a second time
-    return replace(ds, startups=records, conditioning=list(ds.conditioning) + lines,
+    return replace(ds, startups=records, stops=stops, conditioning=list(ds.conditioning) + lines,
                    conditioning_removed=list(ds.conditioning_removed) + removed,
                    chord_voltage=ds.chord_voltage or ds.input_hold == "linear")
 
 
 def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_frequency: float | None,
                       measured_voltage: bool = True, continuous_voltage: bool = False,
-                      ) -> tuple[StartupRecord, list[str], list[str]]:
-    """One record conditioned, what was done (plain-English lines), and the effects it found and
+                      ) -> tuple[StartupRecord, list[str], list[str], float]:
+    """One record conditioned, what was done (plain-English lines), the effects it found and
     removed (``sensor_offset``: offsets removed; ``current_sensor_saturation``: clipped or
-    flattened current samples masked; the switching window's masked samples are no effect).
+    flattened current samples masked; the switching window's masked samples are no effect), and
+    the speed sensor's rest offset it removed (rad/s; 0 when none).
 
     ``continuous_voltage``: the voltages are samples of a continuous voltage (``input_hold:
     linear`` without ``chord_voltage``): the volt-seconds the model's linear interpolation loses
@@ -112,16 +119,16 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     i_r, i_s, _ = inverse_clarke(rec.i_alpha, rec.i_beta)
     i = np.vstack([i_r, i_s])
     if not np.any(v) or n < 16:
-        return rec, ["not conditioned: no voltage or too few samples"], []
+        return rec, ["not conditioned: no voltage or too few samples"], [], 0.0
     speed = rec.speed if rec.has_speed else None
     with np.errstate(all="ignore"):
         try:
             cond, report = condition_record(v, i, ts, speed, f0=supply_frequency, p=pole_pairs,
                                             soft=measured_voltage)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError, IndexError) as exc:
-            return rec, [f"not conditioned ({type(exc).__name__}: {exc})"], []
+            return rec, [f"not conditioned ({type(exc).__name__}: {exc})"], [], 0.0
     if not np.isfinite(report.f0) or report.f0 <= 0 or n * ts * report.f0 < MIN_PERIODS:
-        return rec, ["not conditioned: fewer than three supply periods"], []
+        return rec, ["not conditioned: fewer than three supply periods"], [], 0.0
     said = [f"supply frequency {report.f0:.3f} Hz ({report.f0_source})"]
     first = cond.first
     if report.switch_on is not None:
@@ -166,9 +173,9 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         said.append(f"{n_masked} current samples masked: {sum(report.n_clipped)} hard-clipped, "
                     f"{sum(report.n_saturated)} on flattened (soft-saturated) peaks")
     found = (["sensor_offset"] if removed else []) + (["current_sensor_saturation"] if n_masked else [])
-    speed_out = rec.speed
+    speed_out, speed_offset = rec.speed, 0.0
     if speed is not None and np.isfinite(report.speed_offset):
-        speed_out = rec.speed - report.speed_offset
+        speed_out, speed_offset = rec.speed - report.speed_offset, float(report.speed_offset)
         said.append(f"speed offset {report.speed_offset:+.4g} rad/s (rest before switch-on) removed")
     if report.speed_check is not None:
         said.append(report.speed_check.line())
@@ -186,7 +193,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     continuous = continuous_voltage or steps is not None  # a measured switch-on: a continuous supply
     if (first == 0 and not removed and not n_masked and speed_out is rec.speed and steps is None
             and not continuous):
-        return rec, said, found
+        return rec, said, found, speed_offset
     v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
     i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
     sl = slice(first, n)
@@ -206,7 +213,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
         weight=None if not n_masked else weight,
         switch_on_sample=None if steps is None else steps.steps[-1] + 1,
-    ), said, found
+    ), said, found, speed_offset
 
 
 def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:
