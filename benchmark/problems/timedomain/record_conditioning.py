@@ -427,7 +427,7 @@ def condition_record(v, i, ts: float, speed=None, *, f0: float | None = None, p:
         notes.append(f"currents leave their rest level at t = {k_rest * ts:.4f} s, before the voltage's "
                      f"switch-on at {k_on * ts:.4f} s (a live low voltage, e.g. a V/f boost): no pre-trigger")
         k_on = None
-    elif voltage_rises_before(v, ts, k_on):
+    elif voltage_rises_before(v, k_on):
         notes.append(f"the voltage's magnitude rises steadily before its switch-on at {k_on * ts:.4f} s (a live "
                      f"low voltage, e.g. a V/f ramp from a boost voltage): no pre-trigger")
         k_on = None

@@ -106,6 +106,14 @@ REST_NOISE_K = 8.0
 REST_GUARD_S = 2e-3
 
 
+def difference_noise(x) -> float:
+    """Sample noise (one standard deviation) of ``x`` from its first differences: the robust
+    spread (1.4826 median absolute deviation) of ``diff(x)`` over sqrt(2); a smooth trend or a
+    slow ramp adds almost nothing to it."""
+    d = np.diff(np.asarray(x, dtype=float))
+    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
+
+
 def current_departure(i, ts: float, k_on: int | None, *, smooth_s: float = 1e-3) -> int | None:
     """First sample before ``k_on`` at which a phase current leaves its rest level, or None
     when the currents are at rest up to ``k_on`` (a true pre-trigger: supply off, only offsets
@@ -128,8 +136,7 @@ def current_departure(i, ts: float, k_on: int | None, *, smooth_s: float = 1e-3)
     first = None
     for x in i:
         seg = x[:k_on]
-        d = np.diff(x[: max(k_on, 3)])
-        sigma = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
+        sigma = difference_noise(x[: max(k_on, 3)])
         ref = float(np.median(seg[: max(3, min(len(seg), 5 * w))]))
         sm = np.convolve(seg - ref, np.ones(w) / w, mode="same")
         out = np.flatnonzero(np.abs(sm) > max(REST_NOISE_K * sigma, REST_LEVEL * peak))
@@ -144,7 +151,7 @@ LIVE_RISE_LEVEL = 0.01
 LIVE_NOISE_K = 8.0
 
 
-def voltage_rises_before(v_phases, ts: float, k_on: int | None) -> bool:
+def voltage_rises_before(v_phases, k_on: int | None) -> bool:
     """Whether the voltage before ``k_on`` is live: its magnitude rises through the stretch.
 
     A pre-trigger holds the sensors' offsets and noise, constant until the first contact; an
@@ -152,7 +159,7 @@ def voltage_rises_before(v_phases, ts: float, k_on: int | None) -> bool:
     level instead (a 1 kW start: 3.9 V at the first sample, 7.8 V at the 5 % contact level
     8.5 ms later), and its current is no sensor offset. The magnitude's mean over the last
     quarter of ``[0, k_on)`` is compared with that over the first quarter; the noise's standard
-    error comes from the median absolute first difference (``ts`` in s, ``v_phases`` (3, n) V)."""
+    error comes from :func:`difference_noise` (``v_phases`` (3, n) V)."""
     if k_on is None or k_on < 8:
         return False
     m = _magnitude(np.asarray(v_phases, dtype=float))
@@ -161,9 +168,7 @@ def voltage_rises_before(v_phases, ts: float, k_on: int | None) -> bool:
     seg = m[:k_on]
     q = max(2, k_on // 4)
     rise = float(np.mean(seg[-q:]) - np.mean(seg[:q]))
-    d = np.diff(seg)
-    sigma = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
-    se = sigma * math.sqrt(2.0 / q)
+    se = difference_noise(seg) * math.sqrt(2.0 / q)
     return rise > max(LIVE_NOISE_K * se, LIVE_RISE_LEVEL * level)
 
 

@@ -218,14 +218,14 @@ def test_a_slow_vf_ramp_under_noisy_currents_is_no_pre_trigger():
     assert k is not None and k >= 50  # long enough for a pre-trigger mean
     assert current_departure(i, ts, k) is None  # the rest check alone misses it
     assert np.mean(i[0, :k]) > 0.4  # the current the old conditioning removed as an offset
-    assert voltage_rises_before(v, ts, k)
+    assert voltage_rises_before(v, k)
     _, rep = condition_record(v, i, ts, f0=50.0)
     assert rep.switch_on is None
     offs = {name: value for name, value, unit, how, se in rep.offsets}
     assert abs(offs["i_r"]) < 0.05 and abs(offs["i_s"]) < 0.05, offs  # true offsets: 0
     # a contactor's pre-trigger (offsets and noise up to the first contact) does not rise
     v2, i2, _, _ = record()
-    assert not voltage_rises_before(v2, TS, detect_switch_on(v2, TS))
+    assert not voltage_rises_before(v2, detect_switch_on(v2, TS))
 
 
 def test_true_pre_trigger_is_kept_with_the_rest_check():

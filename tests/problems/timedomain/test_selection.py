@@ -151,7 +151,7 @@ def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_loa
                          L_M=0.031, L_sigma=0.00185, pole_pairs=3, T_acc=12.06)
     fitz = np.array([0.2778, 0.03278, 0.001853, 0.1457, 0.0844, 0.0038, 0.6121])
     assert held_by_base(names, fitz, slow, st) == []
-    assert abs(estimated_rated_torque(names, fitz, slow) - 62.33) < 0.01
+    assert abs(estimated_rated_torque(dict(zip(names, fitz, strict=True)), slow) - 62.33) < 0.01
     assert held_by_base(names[:-1], x[:-1], ctx, st) == []  # case-1 base: no fc in it
     doc = {"status": "unexplained", "verdict": "unexplained", "effects": [], "explained_share": 0.0,
            "gap_before": {"heldout_rms_over_noise": 1.13}, "gap_after": {"heldout_rms_over_noise": 1.13},

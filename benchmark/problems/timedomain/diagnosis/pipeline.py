@@ -54,6 +54,7 @@ which reads only ``meta.yaml`` and the record tables.
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -151,9 +152,7 @@ def friction_scale(estimate: dict[str, float], ctx) -> float:
     speed pulls both to zero (the model then gets as close to it as it can), and a box of
     ``[0, 5 x 0]`` would lock them there for every augmented model, so that a load torque
     would be chosen to stand in for the motor's own friction."""
-    names = list(estimate)
-    rated = estimated_rated_torque(names, np.array([estimate[n] for n in names], float), ctx)
-    return 0.3 * estimate["fv"] * ctx.w_sync + FRICTION_FLOOR_SHARE * rated + 1e-9
+    return 0.3 * estimate["fv"] * ctx.w_sync + FRICTION_FLOOR_SHARE * estimated_rated_torque(estimate, ctx) + 1e-9
 
 
 def rated_torque(nameplate: dict | None) -> float | None:
@@ -179,14 +178,14 @@ def pullout_torque(Rs: float, Le: float, ctx) -> float:
     return 3.0 * ctx.pole_pairs * ctx.V1**2 / (4.0 * w_e * (Rs + np.hypot(Rs, w_e * Le)))
 
 
-def estimated_rated_torque(names: list[str], x: np.ndarray, ctx) -> float:
-    """A rated torque (N m) for a record without a nameplate: the base model's pull-out torque
-    over :data:`PULLOUT_OVER_RATED`; 0 when the base model has no ``Rs`` and ``Le``. It is
+def estimated_rated_torque(params: Mapping[str, float], ctx) -> float:
+    """A rated torque (N m) for a record without a nameplate: the pull-out torque of the base
+    model ``params`` over :data:`PULLOUT_OVER_RATED`; 0 when it has no ``Rs`` and ``Le``. It is
     within 0.75-1.6 times the rated torque of the validation motors, whatever their start (a
     slow inverter ramp makes ``T_acc`` a fraction of the rated torque)."""
-    if "Rs" not in names or "Le" not in names:
+    if "Rs" not in params or "Le" not in params:
         return 0.0
-    return pullout_torque(float(x[names.index("Rs")]), float(x[names.index("Le")]), ctx) / PULLOUT_OVER_RATED
+    return pullout_torque(float(params["Rs"]), float(params["Le"]), ctx) / PULLOUT_OVER_RATED
 
 
 def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettings,
@@ -197,7 +196,8 @@ def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettin
     if rated:
         scale, label = rated, "rated torque"
     else:
-        scale, label = estimated_rated_torque(names, x, ctx), "rated torque estimated as 1/3 of the pull-out torque"
+        scale = estimated_rated_torque(dict(zip(names, map(float, x), strict=True)), ctx)
+        label = "rated torque estimated as 1/3 of the pull-out torque"
     if "fc" not in names or not scale or scale <= 0:
         return []
     fc = float(x[names.index("fc")])

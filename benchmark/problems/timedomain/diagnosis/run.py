@@ -122,7 +122,7 @@ def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, p
     cost_alone = float(alone.evaluate(np.atleast_2d(ident_alone.x))[0])
     conflict = not 1.0 / STOP_INERTIA_CONFLICT <= ratio <= STOP_INERTIA_CONFLICT
     used = bool(not conflict or cost_with_stop <= cost_alone)
-    return ({"used": used, "J_with_stop": j_stop, "J_start_alone": j_alone, "ratio": ratio,
+    return ({"used": used, "conflict": conflict, "J_with_stop": j_stop, "J_start_alone": j_alone, "ratio": ratio,
              "start_alone_cost": cost_alone, "start_cost_at_stop_fit": cost_with_stop}, alone, ident_alone)
 
 
@@ -172,11 +172,11 @@ def base_identification_lines(bi: dict | None) -> list[str]:
                      f"{STOP_INERTIA_CONFLICT:g} apart). The stop record is no free coast of this machine (an "
                      "inverter holding a zero vector brakes it, or a brake, or another load): the diagnosis uses "
                      "the start-up alone, with fv and fc searched.")
-    elif sr and not 1.0 / STOP_INERTIA_CONFLICT <= sr["ratio"] <= STOP_INERTIA_CONFLICT:
+    elif sr and sr.get("conflict"):
         lines.append(f"Stop record kept: the start-up alone found J = {sr['J_start_alone']:.4g} kg m^2 against "
                      f"{sr['J_with_stop']:.4g} with the stop ({sr['ratio']:.3g} times), but it fits the start-up "
                      f"worse than the parameters found with the stop do (cost {sr['start_alone_cost']:.6g} "
-                     f"against {sr.get('start_cost_at_stop_fit', math.nan):.6g}): that search stopped in another "
+                     f"against {sr['start_cost_at_stop_fit']:.6g}): that search stopped in another "
                      "basin.")
     return lines
 
