@@ -124,6 +124,8 @@ CONFIG_ERRORS = [
     (["problem.cost.exponent=3"], "problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14)"),
     (["+problem.cost.weights.torque=1"], "problem.cost.weights.torque: unknown channel; valid: ['i_alpha'"),
     (["problem.friction_case=3"], "problem.friction_case: must be 1"),
+    (["problem.held_friction={fv: 0}"], "problem.held_friction: expected {fv: N m s/rad, fc: N m}"),
+    (["problem.held_friction={fv: 0, fc: -1}"], "problem.held_friction.fc: must be a non-negative number"),
     (
         ["optimizer=scipy_de", "+optimizer.plugin.popsiz=3"],
         "optimizer.plugin.popsiz: not an option of plugins.scipy_de.minimize; valid: ['strategy', 'popsize'",

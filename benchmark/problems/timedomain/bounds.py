@@ -76,7 +76,8 @@ PARAMETER_SIGNS = {"Rs": "positive", "Ls": "positive", "Le": "positive", "Rr": "
 def check_config(run) -> None:
     """Configuration checks of this problem that need no data, run by the harness before any
     work starts (``run``: the resolved run configuration): ``bounds`` names and values,
-    ``problem.cost``, ``problem.friction_case``, ``problem.stator_resistance``."""
+    ``problem.cost``, ``problem.friction_case``, ``problem.stator_resistance``,
+    ``problem.held_friction``."""
     user = run.get("bounds")
     if user is not None:
         if not hasattr(user, "items"):
@@ -105,6 +106,13 @@ def check_config(run) -> None:
     rs = pcfg.get("stator_resistance", "free")
     if rs not in ("free", "prior", "fixed"):
         raise ConfigError(f"problem.stator_resistance: must be free, prior or fixed, got {rs!r}")
+    held = pcfg.get("held_friction")
+    if held is not None:
+        if not hasattr(held, "items") or sorted(str(k) for k in held) != ["fc", "fv"]:
+            raise ConfigError(f"problem.held_friction: expected {{fv: N m s/rad, fc: N m}} or null, got {held!r}")
+        for k, v in held.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ConfigError(f"problem.held_friction.{k}: must be a non-negative number, got {v!r}")
 
 
 def _check_pair(src: str, name: str, val) -> tuple[float, float]:

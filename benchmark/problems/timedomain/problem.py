@@ -18,12 +18,13 @@ they then come from the start-up alone).
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
 import yaml
 
-from benchmark.core.errors import ConfigError, DataError
+from benchmark.core.errors import ConfigError, DataError, ImbenchWarning
 from benchmark.core.problem import Problem
 from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config: the harness's hook)
     check_config,
@@ -47,7 +48,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
     dataset : the (conditioned) data set.
     lower, upper : bounds of the searched parameters, in :attr:`parameter_names` order.
     mechanical : free-stop estimate fixing ``tau_m`` and ``fc/J``, or None (then ``fv``, ``fc``
-        are searched).
+        are searched, or held at ``held_friction``: (N m s/rad, N m)).
     inertia : known inertia (kg m^2), or None to search ``J``.
     exponent : 1 (eq. 15) or 2 (eq. 14).
     weights : (ka, kb, kw). The speed weight is set to 0 when no record has a speed (a record
@@ -64,7 +65,8 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
 
     def __init__(self, dataset: StartupDataset, lower, upper, mechanical: MechanicalEstimate | None = None,
                  inertia: float | None = None, exponent: int = 1, weights=(1.0, 1.0, 0.5),
-                 truth: dict | None = None, stator_resistance: str = "free"):
+                 truth: dict | None = None, stator_resistance: str = "free",
+                 held_friction: tuple[float, float] | None = None):
         if exponent not in (1, 2):
             raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent}")
         self.dataset = dataset
@@ -91,7 +93,8 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         names += ["Ls", "Le", "Rr"]
         if inertia is None:
             names.append("J")
-        if mechanical is None:
+        self.held_friction = None if mechanical is not None or held_friction is None else tuple(held_friction)
+        if mechanical is None and self.held_friction is None:
             names += ["fv", "fc"]
         self.parameter_names = tuple(names)
         self.lower = np.asarray(lower, dtype=float)
@@ -124,6 +127,8 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         if self.mechanical is not None:
             fv = J / self.mechanical.tau_m
             fc = J * self.mechanical.fc_over_J
+        elif self.held_friction is not None:
+            fv, fc = (np.full(len(X), v) for v in self.held_friction)
         else:
             fv, fc = col["fv"], col["fc"]
         return np.column_stack([col["Rs"], col["Ls"], col["Le"], col["Rr"], J, fv, fc])
@@ -347,6 +352,8 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
                                "t_free": m.t_free}
         if self.inertia is not None:
             d["inertia_known"] = self.inertia
+        if self.held_friction is not None:
+            d["held_friction"] = dict(zip(("fv", "fc"), self.held_friction, strict=True))
         if not self.speed_measured:
             d["speed"] = "not measured (speed weight set to 0)"
         if self.nuisance_names:
@@ -413,8 +420,16 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         stop = ds.stops[0]
         mechanical = fit_free_stop(stop.t, stop.speed, case=settings.friction_case, source=stop.source)
     inertia = ds.inertia if ds.inertia is not None else settings.known_inertia
+    held = settings.held_friction
+    if held is not None:
+        warnings.warn(ImbenchWarning(
+            "problem.held_friction ignored: the stop record's pre-identification fixes the friction" if mechanical
+            else f"friction held at the stated assumption fv = {held[0]:g} N m s/rad, fc = {held[1]:g} N m "
+                 "(problem.held_friction), not searched: J absorbs any difference from the true friction, "
+                 "which its standard error does not include"),
+            stacklevel=2)
     names = ([] if settings.stator_resistance == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
-        (["J"] if inertia is None else []) + ([] if mechanical else ["fv", "fc"])
+        (["J"] if inertia is None else []) + ([] if mechanical or held is not None else ["fv", "fc"])
     bounds = choose_bounds(settings, names, ds)
     return TimeDomainProblem(
         ds,
@@ -426,6 +441,7 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         weights=list(settings.weights),
         truth=truth,
         stator_resistance=settings.stator_resistance,
+        held_friction=held,
     )
 
 

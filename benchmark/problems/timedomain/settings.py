@@ -29,6 +29,9 @@ class TimeDomainSettings:
     known_inertia : the inertia (kg m^2) when the preset declares it known, else None.
     stator_resistance : ``free`` (searched), ``prior`` (searched, pulled towards the DC value)
         or ``fixed`` (held at the DC value of ``meta.yaml``'s ``stator_dc_resistance``).
+    held_friction : (fv in N m s/rad, fc in N m) held instead of searched where no stop record
+        fixes the friction (an assumption the user states, e.g. for a record without a speed
+        sensor), or None (searched).
     """
 
     exponent: int = 1
@@ -39,6 +42,7 @@ class TimeDomainSettings:
     preset_bounds: dict[str, tuple[float, float]] | None = None
     known_inertia: float | None = None
     stator_resistance: str = "free"
+    held_friction: tuple[float, float] | None = None
     extra: dict = field(default_factory=dict)
 
     @classmethod
@@ -62,7 +66,12 @@ class TimeDomainSettings:
             preset_bounds=_pairs(motor.get("bounds")) if from_preset else None,
             known_inertia=known,
             stator_resistance=str(problem.get("stator_resistance", "free")),
+            held_friction=_friction_pair(problem.get("held_friction")),
         )
+
+
+def _friction_pair(held) -> tuple[float, float] | None:
+    return None if held is None else (float(held["fv"]), float(held["fc"]))
 
 
 def _pairs(bounds) -> dict | None:
