@@ -43,7 +43,8 @@ class EffectContext:
     ``J w_end / t_90``, a scale for load torques, about 1-2 times a motor's rated torque);
     load_change (s from the record's start, or None): where the current's envelope changes most
     abruptly after the start-up has reached speed (a load step's likely instant, a starting
-    value for effects that step; see :func:`load_change_time`).
+    value for effects that step; see :func:`load_change_time`); T_rated (N m, a rated torque
+    estimated from the base model, or 0 when the context does not have one).
     """
 
     w_e: float
@@ -60,6 +61,7 @@ class EffectContext:
     J: float = 0.0
     T_acc: float = 0.0
     load_change: float | None = None
+    T_rated: float = 0.0
 
     @property
     def flux(self) -> float:
@@ -68,9 +70,12 @@ class EffectContext:
 
     @property
     def torque_scale(self) -> float:
-        """A torque scale for load torques, N m: ``T_acc``, or (a context without it) a quarter
-        of ``1.5 p flux I_peak``."""
-        return self.T_acc if self.T_acc > 0 else 0.25 * 1.5 * self.pole_pairs * self.flux * self.I_peak
+        """A torque scale for load torques, N m: the larger of ``T_acc`` and ``T_rated`` (a slow
+        inverter ramp makes ``T_acc`` a fifth of the rated torque, and a load of the rated torque
+        must stay within a load effect's bounds), or (a context with neither) a quarter of
+        ``1.5 p flux I_peak``."""
+        scale = max(self.T_acc, self.T_rated)
+        return scale if scale > 0 else 0.25 * 1.5 * self.pole_pairs * self.flux * self.I_peak
 
     @property
     def record_duration(self) -> float:

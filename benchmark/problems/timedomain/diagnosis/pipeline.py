@@ -55,7 +55,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -212,10 +212,13 @@ def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettin
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
-    return effect_context(data.t, data.v_alpha, data.v_beta, data.meas[0], data.meas[1],
-                          data.meas[2] if data.has_speed else None,
-                          data.pole_pairs, estimate["J"], estimate["Ls"] - estimate["Le"], estimate["Le"],
-                          dc_link_voltage)
+    """The effects' reference scales from the record and the base estimate, with the rated
+    torque of :func:`estimated_rated_torque`."""
+    ctx = effect_context(data.t, data.v_alpha, data.v_beta, data.meas[0], data.meas[1],
+                         data.meas[2] if data.has_speed else None,
+                         data.pole_pairs, estimate["J"], estimate["Ls"] - estimate["Le"], estimate["Le"],
+                         dc_link_voltage)
+    return replace(ctx, T_rated=estimated_rated_torque(estimate, ctx))
 
 
 def screen(effects: dict[str, Effect], facts: dict) -> tuple[list[Effect], list[dict]]:
@@ -348,8 +351,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     base = sel.model([])
     x0 = np.array([centre[n] for n in base.base_names])
     base_full = base.fit(x0, None, 2 * settings.fit_iterations)
-    base_fit = SetFit(base, {"A": base.fit(base_full, fold_a, settings.fit_iterations),
-                             "B": base.fit(base_full, fold_b, settings.fit_iterations)}, masks)
+    base_fit = sel.cross_start(SetFit(base, {"A": base.fit(base_full, fold_a, settings.fit_iterations),
+                                             "B": base.fit(base_full, fold_b, settings.fit_iterations)}, masks))
     counts = {ch: s.stop - s.start for ch, s in data.channel_slices().items()}
     noise_all = combined(data.noise, counts)
 
@@ -364,6 +367,11 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         final, rounds = sel.forward_selection(candidates, base_fit, q_before.threshold, progress)
     else:
         final, rounds = base_fit, []
+    full_x = None
+    if final.names:  # the fit on all data, also a start for the fold fits (cross_start)
+        full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.final_iterations)
+        final = sel.cross_start(final, [full_x])
+    before_prune = final.model
     final, withouts, pruned = sel.prune(final, base_fit, q_before.threshold)
     q_after = quality(final.held_used)
     chosen = final.names
@@ -372,7 +380,10 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     # each chosen effect's own share (drop-one) and its parameters with standard errors
     per_effect = []
     excess = q_before.ratio**2 - 1.0
-    full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.final_iterations) if chosen else None
+    if chosen and final.model is not before_prune:
+        full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.final_iterations)
+    elif not chosen:
+        full_x = None
     se = final.model.standard_errors(full_x) if chosen else None
     for j, name in enumerate(chosen):
         without = withouts[j]
