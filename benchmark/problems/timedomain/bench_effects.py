@@ -36,14 +36,15 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     total inertia (what a rigid-shaft fit sees); extras ``tm_freq`` (Hz), ``tm_ratio``,
     ``tm_zeta``.
 ``load_torque``
-    A load torque on the shaft. Size: the load torque over ``T_acc`` (the mean torque that
-    accelerates the rotor to its final speed, :attr:`EffectContext.torque_scale
-    <benchmark.core.effects.EffectContext.torque_scale>`; about 1-2 times rated torque),
-    0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
+    A load torque on the shaft. Size: the load torque over the context's torque scale
+    (:attr:`EffectContext.torque_scale <benchmark.core.effects.EffectContext.torque_scale>`:
+    ``T_acc``, the mean torque that accelerates the rotor to its final speed, about 1-2 times
+    rated torque on a direct-on-line start; in the diagnosis at least the rated torque
+    estimated from the base model), 0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
     (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
     (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record). One
     augmentation fits all three: extras ``load_const``, ``load_quad``, ``load_step`` (over
-    ``T_acc``) and ``load_step_time`` (fraction of the record), the step smoothed over one
+    the torque scale, each within 0-1.5) and ``load_step_time`` (fraction of the record), the step smoothed over one
     sample (a tanh of time constant ``Ts``): abrupt enough to excite a coupling resonance as a
     real step does, smooth enough for its instant to be fitted between samples.
 ``channel_delay``
