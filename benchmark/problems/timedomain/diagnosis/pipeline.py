@@ -18,8 +18,9 @@
    together); then the backward check (``Selector.prune``): every
    chosen effect must still earn the band part of that rule beside the others and, where the
    final model is within ``final_share_gap`` (2) of the noise, remove ``min_final_share``
-   (60 %) of the excess the model leaves without it, else the weakest is dropped (``pruned``)
-   and the check repeats.
+   (60 %) of the excess the model leaves without it (further from the noise ``min_far_share``,
+   5 %), else the weakest is dropped (``pruned``) and the check repeats; an effect dropped frees
+   its place, and the forward selection resumes once from what is left, without it.
 6. Verdict (:func:`verdict_of`) with the statuses below, each chosen effect's drop-one
    share, fitted parameters and standard errors, candidates that leave the same signature,
    and where in time the excess lies.
@@ -89,7 +90,9 @@ class DiagnosisSettings:
     min_band_drop : that drop must also exceed this fraction of the noise band (chi^2 units).
     min_final_share : backward check: in the final model (two or more effects), dropping an
         effect must raise the held-out chi^2 by this share of the excess left without it ...
-    final_share_gap : ... when the final model's held-out RMS over noise is at most this.
+    final_share_gap : ... when the final model's held-out RMS over noise is at most this;
+        further from the noise, this smaller share, ``min_far_share``: an effect that removes
+        nothing of its own beside the others (a rider that tied with a real effect in its round).
     explained_share, partly_share : shares of the excess separating the statuses.
     max_effects : at most this many effects are chosen.
     indistinguishable_margin : a candidate whose held-out excess reduction in the round an
@@ -123,6 +126,7 @@ class DiagnosisSettings:
     min_band_drop: float = 0.5
     min_final_share: float = 0.6
     final_share_gap: float = 2.0
+    min_far_share: float = 0.05
     explained_share: float = 0.9
     partly_share: float = 0.3
     max_effects: int = 4
@@ -373,6 +377,17 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         final = sel.cross_start(final, [full_x])
     before_prune = final.model
     final, withouts, pruned = sel.prune(final, base_fit, q_before.threshold)
+    if pruned and len(final.names) < settings.max_effects and final.chi2 > q_before.threshold**2:
+        # the pruned effect's place is free: resume the selection once, without the pruned ones
+        rest = [e for e in candidates if e.name not in pruned]
+        final, more = sel.forward_selection(rest, final, q_before.threshold, progress)
+        done = sum(1 for r in rounds if "candidates" in r)
+        for r in more:
+            r["round"] += done if "candidates" in r else 0
+            r["resumed_after_pruning"] = list(pruned)
+        rounds += more
+        final, withouts, again = sel.prune(final, base_fit, q_before.threshold)
+        pruned += again
     q_after = quality(final.held_used)
     chosen = final.names
     status, verdict, share = verdict_of(settings, q_before, q_after, chosen)
