@@ -395,10 +395,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     # each chosen effect's own share (drop-one) and its parameters with standard errors
     per_effect = []
     excess = q_before.ratio**2 - 1.0
-    if chosen and final.model is not before_prune:
+    if chosen and final.model is not before_prune:  # pruned, or more chosen after: fit the final set again
         full_x = final.model.fit(0.5 * (final.xs["A"] + final.xs["B"]), None, settings.final_iterations)
-    elif not chosen:
-        full_x = None
     se = final.model.standard_errors(full_x) if chosen else None
     for j, name in enumerate(chosen):
         without = withouts[j]

@@ -137,10 +137,10 @@ class Selector:
                 mask = self.masks[f]
                 best, best_ssr = xs[f], model.ssr(xs[f], mask)
                 for p in (xs[other], *points):
-                    if model.ssr(p, mask) < best_ssr:
+                    ssr_p = model.ssr(p, mask)
+                    if ssr_p < best_ssr:
                         x = model.fit(p, mask, self.settings.fit_iterations)
-                        for cand in (x, p):
-                            s = model.ssr(cand, mask)
+                        for cand, s in ((x, model.ssr(x, mask)), (p, ssr_p)):
                             if s < best_ssr:
                                 best, best_ssr, moved = cand, s, True
                 xs[f] = best
