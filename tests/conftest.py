@@ -26,6 +26,27 @@ def compose_config(overrides=(), name: str = "config"):
         return compose(name, overrides=list(overrides))
 
 
+def remade_blind_set(spec: dict, folder: Path):
+    """An independent-plant blind set remade from the ``spec`` of its truth file, written to
+    ``folder`` without its truth (as a bench folder holds none); returns (dataset, folder)."""
+    from synthetic.independent import make_dataset, write_dataset
+
+    made = make_dataset(spec)
+    folder = write_dataset(made, folder)
+    (folder / "truth.yaml").unlink(missing_ok=True)
+    return made, folder
+
+
+def diagnose_with(folder: Path, outdir: Path, candidates) -> dict:
+    """The default diagnosis of ``folder`` (``python -m benchmark.diagnose``) with only the
+    effects ``candidates``, no figures; returns the diagnosis document."""
+    from benchmark.core.harness import run_diagnosis
+
+    cfg = compose_config([f"data.path={folder}", f"candidates=[{','.join(candidates)}]", "figures=false"],
+                         name="diagnose")
+    return run_diagnosis(cfg, outdir)
+
+
 def identify_folder(folder, outdir) -> dict:
     """The default identification (``python -m benchmark data.path=folder``, no figures, no
     checkpoint, no progress bar) of a data folder, its warnings silenced; returns the result record."""

@@ -15,9 +15,7 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from benchmark.core.harness import run_diagnosis
-from synthetic.independent import make_dataset, write_dataset
-from tests.conftest import compose_config
+from tests.conftest import diagnose_with, remade_blind_set
 
 BLIND_LOAD_AFTER_RAMP = yaml.safe_load("""
 effects:
@@ -41,12 +39,8 @@ stop: {duration: 5.993189560598312, sample_time: 0.001}
 
 
 def test_a_load_step_after_a_slow_ramp_is_named_alone(tmp_path):
-    made = make_dataset(BLIND_LOAD_AFTER_RAMP)
-    folder = write_dataset(made, tmp_path / "set")
-    (folder / "truth.yaml").unlink(missing_ok=True)
-    cfg = compose_config([f"data.path={folder}", "candidates=[load_torque,two_mass]", "figures=false"],
-                         name="diagnose")
-    doc = run_diagnosis(cfg, tmp_path / "out")
+    made, folder = remade_blind_set(BLIND_LOAD_AFTER_RAMP, tmp_path / "set")
+    doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "two_mass"])
     assert doc["verdict"] == "load_torque", doc["selection"]
     assert doc["gap_before"]["heldout_rms_over_noise"] > 30.0
     assert doc["gap_after"]["heldout_rms_over_noise"] < 2.0

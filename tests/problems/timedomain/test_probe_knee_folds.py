@@ -17,11 +17,9 @@ from __future__ import annotations
 import numpy as np
 import yaml
 
-from benchmark.core.harness import run_diagnosis
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.diagnosis.fit import SHORT_BLOCK_PERIODS, DiagnosisData
-from synthetic.independent import make_dataset, write_dataset
-from tests.conftest import compose_config
+from tests.conftest import diagnose_with, remade_blind_set
 
 BLIND_PROBE_KNEE = yaml.safe_load("""
 effects:
@@ -59,9 +57,7 @@ stop: {duration: 9.186613811178079, sample_time: 0.001}
 
 
 def remade(tmp_path):
-    folder = write_dataset(make_dataset(BLIND_PROBE_KNEE), tmp_path / "set")
-    (folder / "truth.yaml").unlink(missing_ok=True)
-    return folder
+    return remade_blind_set(BLIND_PROBE_KNEE, tmp_path / "set")[1]
 
 
 def test_each_fold_holds_large_peaks_of_the_start(tmp_path):
@@ -83,9 +79,7 @@ def test_each_fold_holds_large_peaks_of_the_start(tmp_path):
 
 
 def test_a_probe_knee_is_named_alone(tmp_path):
-    cfg = compose_config([f"data.path={remade(tmp_path)}", "candidates=[current_sensor_saturation,speed_sensor_gain]",
-                          "figures=false"], name="diagnose")
-    doc = run_diagnosis(cfg, tmp_path / "out")
+    doc = diagnose_with(remade(tmp_path), tmp_path / "out", ["current_sensor_saturation", "speed_sensor_gain"])
     assert doc["verdict"] == "current_sensor_saturation", doc["selection"]
     assert doc["status"] == "explained"
     assert doc["gap_before"]["heldout_rms_over_noise"] > 5.0

@@ -16,9 +16,7 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from benchmark.core.harness import run_diagnosis
-from synthetic.independent import make_dataset, write_dataset
-from tests.conftest import compose_config
+from tests.conftest import diagnose_with, remade_blind_set
 
 BLIND_TACHOMETER = yaml.safe_load("""
 motor: paper_1kw
@@ -57,12 +55,8 @@ seed: 1679352321
 
 
 def test_zero_friction_in_the_base_does_not_make_a_load_torque_rider(tmp_path):
-    made = make_dataset(BLIND_TACHOMETER)
-    folder = write_dataset(made, tmp_path / "set")
-    (folder / "truth.yaml").unlink(missing_ok=True)
-    cfg = compose_config([f"data.path={folder}", "candidates=[speed_sensor_gain,load_torque]", "figures=false"],
-                         name="diagnose")
-    doc = run_diagnosis(cfg, tmp_path / "out")
+    made, folder = remade_blind_set(BLIND_TACHOMETER, tmp_path / "set")
+    doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain", "load_torque"])
     ident = doc["base"]["identification"]
     assert ident["fv"] < 1e-9 and ident["fc"] < 1e-9  # what the identification gives: no friction at all
     assert doc["verdict"] == "speed_sensor_gain", doc["selection"]
@@ -131,9 +125,7 @@ def test_the_stop_record_is_seen_through_the_same_tachometer(tmp_path):
     from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
     from benchmark.problems.timedomain.diagnosis.pipeline import base_context, friction_scale
 
-    made = make_dataset(BLIND_TACHOMETER_STOP)
-    folder = write_dataset(made, tmp_path / "set")
-    (folder / "truth.yaml").unlink(missing_ok=True)
+    made, folder = remade_blind_set(BLIND_TACHOMETER_STOP, tmp_path / "set")
     ds = load_startup_dataset(folder)
     assert any(line.startswith("stop record: the start-up's speed offset +0.3") for line in ds.conditioning)
     data = DiagnosisData.from_dataset(ds)
