@@ -21,7 +21,9 @@ whose status is not ``no_gap`` or that name an effect anyway. Two-effect sets: b
 named. An injected effect the conditioning removed and named (offsets, clipped or flattened
 currents) counts as found; an effect the document says the base model holds (``held_by_base``: a
 constant load torque taken as Coulomb friction) counts as named, injected or not. Injected
-effects the base model cannot see (its held-out gap within the noise band) are left out and listed.
+effects the base model cannot see (its held-out gap within the noise band) are left out and listed;
+in a two-effect set, each effect's own gap is measured on the set made again with it alone, and one
+within the band that the verdict does not name is left out of that set's score.
 """
 
 from __future__ import annotations
@@ -82,6 +84,10 @@ class BlindSettings:
     plant_duration, plant_stop : the plant source's start-up (s; None: the plant's own draw) and
         whether it also records a stop.
     tuned_on : one line on what the diagnosis's thresholds were tuned on, for the report.
+    pair_visibility : (time domain) measure each effect of a two-effect set alone
+        (:func:`~benchmark.analysis.blind_sources.effect_alone_gaps`); one within the noise band
+        that the verdict does not name is left out of that set's score, as an invisible single
+        effect is.
     run : the composed configuration (plain, resolved); each set's generator and diagnosis
         configurations are copies of it (:func:`generator_config`, :func:`diagnosis_config`),
         and it is written next to the scores.
@@ -109,6 +115,7 @@ class BlindSettings:
     plant_duration: float | None = None
     plant_stop: bool = True
     tuned_on: str = ""
+    pair_visibility: bool = True
     run: Mapping = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -131,6 +138,7 @@ class BlindSettings:
             rated_power=_float_or_none(run.get("rated_power")), motulator_stop=bool(run.get("motulator_stop", True)),
             plant_duration=_float_or_none(run.get("plant_duration") or None),
             plant_stop=bool(run.get("plant_stop", True)), tuned_on=str(run.get("tuned_on", "")),
+            pair_visibility=bool(run.get("pair_visibility", True)),
             run=copy.deepcopy(dict(run)))
 
     @property
@@ -273,6 +281,9 @@ def summarise(rows: list[dict]) -> dict:
         "n": len(rows), "scored": len(scored),
         "left_out_invisible": [{"index": r["index"], "truth": r["truth"], "gap_before": r["gap_before"]}
                                for r in left_out],
+        "left_out_of_pairs": [{"index": r["index"], "injected": r["injected"], "effect": e,
+                               "gap_alone": r.get("alone_gaps", {}).get(e, math.nan)}
+                              for r in rows for e in r.get("left_out_effects", [])],
         "exact": len(correct), "exact_rate": len(correct) / len(scored) if scored else math.nan,
         "exact_ci95": wilson(len(correct), len(scored)),
         "effect_sets": len(eff_rows), "effect_sets_exact": len(eff_correct),
@@ -315,8 +326,13 @@ def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) ->
         lines.append("- left out of the score (injected, but the base model's held-out gap is within the noise "
                      "band): " + ", ".join(f"set {r['index']} ({r['truth']}, {r['gap_before']:.2f})"
                                           for r in s["left_out_invisible"]))
+    if s.get("left_out_of_pairs"):
+        lines.append("- effects of two-effect sets left out (their own base-model gap, the set made with that effect "
+                     "alone, within the noise band; not named; the set scored on the other): "
+                     + ", ".join(f"set {r['index']} {r['effect']} of {r['injected']} ({r['gap_alone']:.2f})"
+                                 for r in s["left_out_of_pairs"]))
     labels, cm = s["labels"], np.array(s["confusion"])
-    lines += ["", "Rows: the injected set; columns: the verdict (scored sets).", "",
+    lines += ["", "Rows: the injected set (less a left-out effect); columns: the verdict (scored sets).", "",
               "| truth \\ verdict | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for i, lab in enumerate(labels):
         if cm[i].sum():
@@ -324,7 +340,8 @@ def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) ->
     lines += ["", "| set | truth | status | verdict | held-out gap before | after | explained share | s |",
               "|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['index']} | {r['truth']} | {r['status']} | {r['verdict']} | {r['gap_before']:.2f} "
+        truth = r["truth"] if r.get("injected", r["truth"]) == r["truth"] else f"{r['truth']} (of {r['injected']})"
+        lines.append(f"| {r['index']} | {truth} | {r['status']} | {r['verdict']} | {r['gap_before']:.2f} "
                      f"| {r['gap_after']:.2f} | {_pct(r['explained_share'])} | {r['wall_time_s']:.0f} |")
     return "\n".join(lines) + "\n"
 
@@ -351,17 +368,26 @@ def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dic
     return diagnose_folder(settings, folder, work / "diagnoses" / name)
 
 
-def score_row(index: int, effects: list, doc: dict) -> dict:
+def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
     """One scored row: the injected ``effects`` against the diagnosis document ``doc``; an injected
     effect the conditioning removed and named (``removed_by_conditioning``), or that the base model
     holds under another name and the document says so (``held_by_base``: a constant load torque
-    as Coulomb friction), counts as found."""
+    as Coulomb friction), counts as found.
+
+    ``alone_no_gap``: effects of a two-effect set whose own base-model gap (the set made with that
+    effect alone, :func:`effect_alone_gaps`) is within the noise band. One the verdict does not name
+    is left out of the set's score (``left_out_effects``), as a single effect the base model cannot
+    see is; the set is then scored on the other one. ``injected`` keeps the whole set."""
     held = [h["effect"] for h in doc.get("held_by_base", [])]  # named, whether injected or not
     conditioned = [e for e in doc.get("removed_by_conditioning", []) if e in effects]
     found = conditioned + [e for e in held if e not in conditioned]
+    left = [e for e in effects if e in alone_no_gap and e not in found and e not in doc["effects"]]
+    injected, effects = list(effects), [e for e in effects if e not in left] if len(left) < len(effects) else effects
+    left = [e for e in injected if e not in effects]
     named = [e for e in effects if e in found or e in doc["effects"]]
     named += [e for e in doc["effects"] + held if e not in effects and e not in named]
     return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
+            "injected": label_of(injected), "left_out_effects": left,
             "predicted": label_of(named) if found else predicted_label(doc), "status": doc["status"],
             "verdict": doc["verdict"], "effects": named if found else list(doc["effects"]),
             "conditioned": conditioned, "held_by_base": held, "explained_share": float(doc["explained_share"]),
@@ -386,7 +412,7 @@ def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: 
 def run_source(settings: BlindSettings, command: str) -> dict:
     """Make, hide the truth of, and diagnose every set of ``settings.source``; write the scores
     to ``settings.out/<source>``."""
-    from benchmark.analysis.blind_sources import SOURCES
+    from benchmark.analysis.blind_sources import SOURCES, effect_alone_gaps
 
     source = settings.source
     if source not in SOURCES:
@@ -407,17 +433,25 @@ def run_source(settings: BlindSettings, command: str) -> dict:
         draws = [d for d in draws if d["index"] in done]
     for d in draws:
         if d["index"] in done:
-            rows.append(done[d["index"]])
-            continue
-        doc = make_and_diagnose(settings, d, make, work)
-        row = score_row(d["index"], d["effects"], doc)
-        row |= {"indistinguishable": doc.get("indistinguishable", []),
-                "wall_time_s": float(doc.get("wall_time_s", math.nan)),
-                "draw": {k: v for k, v in d.items() if k not in ("spec",)}}
+            row = done[d["index"]]
+        else:
+            doc = make_and_diagnose(settings, d, make, work)
+            row = score_row(d["index"], d["effects"], doc)
+            row |= {"indistinguishable": doc.get("indistinguishable", []),
+                    "wall_time_s": float(doc.get("wall_time_s", math.nan)),
+                    "draw": {k: v for k, v in d.items() if k not in ("spec",)}}
+            with open(results_file, "a") as fh:
+                fh.write(json.dumps(row, default=float) + "\n")
+        if settings.pair_visibility and len(d["effects"]) == 2:
+            alone = effect_alone_gaps(settings, d, make, work)
+            doc = json.loads((work / "diagnoses" / f"set_{d['index']:03d}" / "diagnosis.json").read_text())
+            row = row | score_row(d["index"], d["effects"], doc, [e for e, a in alone.items() if a["no_gap"]])
+            row["alone_gaps"] = {e: a["gap"] for e, a in alone.items()}
         rows.append(row)
-        with open(results_file, "a") as fh:
-            fh.write(json.dumps(row, default=float) + "\n")
-        print(f"[{source}] set {d['index']:3d}: truth {row['truth']:<40} -> {row['status']:<16} {row['verdict']:<40} "
+        if d["index"] in done:
+            continue
+        print(f"[{source}] set {d['index']:3d}: truth {row.get('injected', row['truth']):<40} -> {row['status']:<16} "
+              f"{row['verdict']:<40} "
               f"gap {row['gap_before']:.2f} -> {row['gap_after']:.2f} ({row['wall_time_s']:.0f} s)", flush=True)
     title = f"# Blind evaluation of the time-domain diagnosis: source `{source}`"
     return write_scores(settings, rows, settings.out / source, command, title)

@@ -14,11 +14,22 @@ Each source is a function of the :class:`~benchmark.analysis.blind.BlindSettings
 from __future__ import annotations
 
 import copy
+import json
+import shutil
 from pathlib import Path
 
 import numpy as np
+from omegaconf import open_dict
 
-from benchmark.analysis.blind import MOTOR_KEYS, BlindSettings, cycled, draw_sets, generator_config, n_effects_of
+from benchmark.analysis.blind import (
+    MOTOR_KEYS,
+    BlindSettings,
+    cycled,
+    diagnosis_config,
+    draw_sets,
+    generator_config,
+    n_effects_of,
+)
 from benchmark.core.effects import load_effects
 
 
@@ -111,3 +122,57 @@ def motulator_source(settings: BlindSettings):
 
 
 SOURCES = {"own": own_source, "plant": plant_source, "motulator": motulator_source}
+
+
+def with_only(source: str, d: dict, keep: str) -> dict:
+    """Draw ``d`` of ``source`` with only its injected effect ``keep`` (same motor, scenario,
+    size and form of that effect, noise seed): the data on which that effect's own base-model
+    gap is measured (:func:`effect_alone_gaps`)."""
+    d = copy.deepcopy(d)
+    d["effects"] = [keep]
+    if source == "own":
+        d["size"] = {keep: d["size"][keep]}
+        d["form"] = {k: v for k, v in d["form"].items() if k == keep}
+        d["effect"] = keep
+    elif source == "plant":
+        d["spec"]["effects"] = [e for e in d["spec"]["effects"] if e["name"] == keep]
+    else:
+        d["options"] = {keep: d["options"][keep]}
+    return d
+
+
+def effect_alone_gaps(settings: BlindSettings, d: dict, make, work: Path) -> dict[str, dict]:
+    """Each injected effect's own base-model gap in a two-effect set ``d``: the set made again with
+    that effect alone (:func:`with_only`: same motor, scenario, size, form and noise seed), its
+    truth moved away, and diagnosed with no effect chosen (``diagnosis.max_effects=0``); per
+    effect ``{"gap": held-out RMS over noise, "no_gap": bool}`` (``no_gap``: within the noise
+    band). Kept in ``work/alone.jsonl``; the data folders go once measured."""
+    store = work / "alone.jsonl"
+    known = {}
+    if store.exists():
+        for line in store.read_text().splitlines():
+            r = json.loads(line)
+            known[(r["index"], r["effect"])] = r
+    out = {}
+    for e in d["effects"]:
+        if (d["index"], e) not in known:
+            one = with_only(settings.source, d, e)
+            folder = work / "alone" / f"set_{d['index']:03d}_{e}"
+            if folder.exists():
+                shutil.rmtree(folder)
+            make(one, folder)
+            (folder / "truth.yaml").unlink(missing_ok=True)
+            c = diagnosis_config(settings, folder)
+            with open_dict(c):
+                c.diagnosis.max_effects = 0
+            from benchmark.core.harness import run_diagnosis
+
+            doc = run_diagnosis(c, work / "alone" / f"diagnosis_{d['index']:03d}_{e}")
+            r = {"index": d["index"], "effect": e, "gap": float(doc["gap_before"]["heldout_rms_over_noise"]),
+                 "no_gap": doc["status"] == "no_gap"}
+            with open(store, "a") as fh:
+                fh.write(json.dumps(r) + "\n")
+            shutil.rmtree(folder, ignore_errors=True)
+            known[(d["index"], e)] = r
+        out[e] = {k: known[(d["index"], e)][k] for k in ("gap", "no_gap")}
+    return out
