@@ -81,6 +81,8 @@ class BlindSettings:
     duration, sample_rate, rated_power, motulator_stop : the motulator source's start-up (s),
         sampling rate (Hz), rated power (W; load-torque sizes are fractions of rated torque) and
         whether it also records a stop (None: not configured).
+    motulator_motors : the motulator source's motors, one drawn per set: ``preset`` (the run's
+        motor) and zoo motor names (``motulator_2p2kw``: motulator's own 2.2 kW example machine).
     plant_duration, plant_stop : the plant source's start-up (s; None: the plant's own draw) and
         whether it also records a stop.
     tuned_on : one line on what the diagnosis's thresholds were tuned on, for the report.
@@ -112,6 +114,7 @@ class BlindSettings:
     sample_rate: float | None = None
     rated_power: float | None = None
     motulator_stop: bool = True
+    motulator_motors: tuple[str, ...] = ("preset",)
     plant_duration: float | None = None
     plant_stop: bool = True
     tuned_on: str = ""
@@ -136,6 +139,7 @@ class BlindSettings:
             resume=bool(run.get("resume", True)), report_only=bool(run.get("report_only") or False),
             duration=_float_or_none(run.get("duration")), sample_rate=_float_or_none(run.get("sample_rate")),
             rated_power=_float_or_none(run.get("rated_power")), motulator_stop=bool(run.get("motulator_stop", True)),
+            motulator_motors=tuple(str(m) for m in run.get("motulator_motors") or ("preset",)),
             plant_duration=_float_or_none(run.get("plant_duration") or None),
             plant_stop=bool(run.get("plant_stop", True)), tuned_on=str(run.get("tuned_on", "")),
             pair_visibility=bool(run.get("pair_visibility", True)),

@@ -77,13 +77,41 @@ def plant_source(settings: BlindSettings):
 
 
 MOTULATOR_EFFECTS = ("main_saturation", "two_mass", "load_torque")
+#: Saturation exponents of motulator's magnetising curve ``L_u/(1 + (psi/psi_k)**S)`` the draws take
+#: (7 is that of motulator's own saturated 2.2 kW example machine).
+MOTULATOR_SATURATION_EXPONENTS = (2.0, 4.0, 6.0, 7.0)
+
+
+def motulator_motor(settings: BlindSettings, name: str) -> tuple[dict, float]:
+    """Motor ``name`` of the motulator source: ``preset`` (the run's motor, its DC link and
+    ``settings.rated_power``) or a zoo motor (:mod:`synthetic.zoo`, e.g. ``motulator_2p2kw``,
+    motulator's own 2.2 kW, 400 V, 4-pole example machine), as ``make_motulator_dataset`` takes
+    it; and the scale of its current noise against the preset's (the ratio of rated power over
+    voltage, so that the noise is the same fraction of the rated current)."""
+    base = copy.deepcopy(dict(settings.run["motor"]))
+    preset_volts = float(np.sqrt(1.5) * 2.0 * float(base["test"]["dc_link_voltage"]) / np.pi)
+    if name == "preset":
+        return ({"parameters": dict(base["parameters"]), "pole_pairs": int(base["pole_pairs"]), "frequency": 50.0,
+                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": settings.rated_power},
+                1.0)
+    from synthetic.zoo import get_motor, motor_description
+
+    try:
+        motor = motor_description(get_motor(name))
+    except KeyError as exc:
+        from benchmark.core.errors import ConfigError
+
+        raise ConfigError(f"motulator_motors: {exc.args[0]} (or 'preset')") from None
+    scale = (motor["rated_power"] / motor["voltage"]) / (float(settings.rated_power) / preset_volts)
+    return motor, float(scale)
 
 
 def motulator_source(settings: BlindSettings):
-    """(draws, make) of motulator: the preset motor spread, dol or six-step, its three effects."""
+    """(draws, make) of motulator: a motor of ``settings.motulator_motors`` (:func:`motulator_motor`)
+    spread, dol or six-step, its three effects."""
     from synthetic.motulator_source import make_motulator_dataset
 
-    base = copy.deepcopy(dict(settings.run["motor"]))
+    motors = {name: motulator_motor(settings, name) for name in settings.motulator_motors}
     spread = settings.vary_motor
     seeds = np.random.SeedSequence(settings.seed).spawn(settings.n)
     draws = []
@@ -91,13 +119,12 @@ def motulator_source(settings: BlindSettings):
         rng = np.random.default_rng(ss)
         k = n_effects_of(i, settings)
         chosen = sorted(str(e) for e in rng.choice(MOTULATOR_EFFECTS, size=k, replace=False)) if k else []
-        par = dict(base["parameters"])
-        for m in MOTOR_KEYS:
-            par[m] = float(par[m]) * float(np.exp(rng.uniform(-spread, spread)))
+        factors = {m: float(np.exp(rng.uniform(-spread, spread))) for m in MOTOR_KEYS}
         opts = {}
         for e in chosen:
             if e == "main_saturation":
-                opts[e] = {"size": float(rng.uniform(0.15, 0.5)), "exponent": float(rng.choice([2.0, 4.0, 6.0]))}
+                opts[e] = {"size": float(rng.uniform(0.15, 0.5)),
+                           "exponent": float(rng.choice(MOTULATOR_SATURATION_EXPONENTS))}
             elif e == "two_mass":
                 opts[e] = {"size": float(rng.uniform(0.3, 0.6)), "resonance_hz": float(rng.uniform(15, 40)),
                            "damping_ratio": float(rng.uniform(0.05, 0.2))}
@@ -107,12 +134,16 @@ def motulator_source(settings: BlindSettings):
                 if form == "step":
                     opts[e]["time"] = float(rng.uniform(0.3, 0.6) * settings.duration)
         scenario = str(rng.choice(["dol", "six_step"]))
-        motor = {"parameters": par, "pole_pairs": int(base["pole_pairs"]), "frequency": 50.0,
-                 "dc_link_voltage": float(base["test"]["dc_link_voltage"]), "rated_power": settings.rated_power}
         noise = {"current_std": float(rng.uniform(0.02, 0.08)), "current_colored_std": float(rng.uniform(0.0, 0.05)),
                  "speed_std": float(rng.uniform(0.05, 0.2)), "speed_quantum": float(rng.choice([0.0, 0.1, 0.5]))}
+        seed = int(rng.integers(2**31 - 1))
+        name = str(rng.choice(list(motors))) if len(motors) > 1 else next(iter(motors))
+        motor, current_scale = copy.deepcopy(motors[name])
+        motor["parameters"] = {k: float(v) * factors.get(k, 1.0) for k, v in motor["parameters"].items()}
+        noise["current_std"] *= current_scale
+        noise["current_colored_std"] *= current_scale
         draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
-                      "noise": noise, "seed": int(rng.integers(2**31 - 1))})
+                      "motor_name": name, "noise": noise, "seed": seed})
 
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),

@@ -185,3 +185,44 @@ def test_a_pair_is_made_again_with_each_effect_alone_from_every_source():
             assert one["spec"]["effects"][0] == next(e for e in d["spec"]["effects"] if e["name"] == b)
         else:
             assert one["options"] == {b: d["options"][b]} and one["seed"] == d["seed"]
+
+
+def test_the_motulator_source_draws_motulator_s_own_2p2kw_machine_too():
+    """The motulator source draws its motor per set from ``motulator_motors``: the run's preset and
+    motulator's own 2.2 kW, 400 V, 4-pole example machine (a third-party motor the project's presets do
+    not hold), each spread by ``vary_motor``, its current noise scaled to its rated current; the
+    saturation exponents include motulator's own 7."""
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    from benchmark.analysis.blind import BlindSettings
+    from benchmark.analysis.blind_sources import SOURCES
+    from synthetic.zoo import get_motor, project_parameters
+
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        both = compose("blind", overrides=["source=motulator", "n=40", "seed=41", "free_share=0.25"])
+        one = compose("blind", overrides=["source=motulator", "n=40", "seed=41", "free_share=0.25",
+                                          "motulator_motors=[preset]"])
+    draws, _ = SOURCES["motulator"](BlindSettings.from_run(both))
+    names = [d["motor_name"] for d in draws]
+    assert names.count("motulator_2p2kw") >= 10 and names.count("preset") >= 10, names
+    big = project_parameters(get_motor("motulator_2p2kw"))
+    for d in draws:
+        if d["motor_name"] == "motulator_2p2kw":
+            assert d["motor"]["pole_pairs"] == 2 and d["motor"]["voltage"] == 400.0
+            ratio = d["motor"]["parameters"]["Rs"] / big["Rs"]
+            assert 0.86 <= ratio <= 1.17  # exp(+-0.15)
+            assert d["motor"]["parameters"]["fc"] == big["fc"]
+    exponents = {d["options"]["main_saturation"]["exponent"] for d in draws if "main_saturation" in d["options"]}
+    assert exponents <= {2.0, 4.0, 6.0, 7.0}
+    # with the preset alone every draw is the one the preset gets among both (the motor's pick comes last)
+    alone, _ = SOURCES["motulator"](BlindSettings.from_run(one))
+    for a, d in zip(alone, draws, strict=True):
+        assert a["motor_name"] == "preset" and a["effects"] == d["effects"] and a["seed"] == d["seed"]
+        if d["motor_name"] == "preset":
+            assert a["motor"] == d["motor"] and a["noise"] == d["noise"]
+        else:
+            scale = d["noise"]["current_std"] / a["noise"]["current_std"]
+            assert 1.2 < scale < 1.4  # 5.5 A per 1 kV against the preset's 4.3
