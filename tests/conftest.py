@@ -37,13 +37,14 @@ def remade_blind_set(spec: dict, folder: Path):
     return made, folder
 
 
-def diagnose_with(folder: Path, outdir: Path, candidates) -> dict:
+def diagnose_with(folder: Path, outdir: Path, candidates, *overrides: str) -> dict:
     """The default diagnosis of ``folder`` (``python -m benchmark.diagnose``) with only the
-    effects ``candidates``, no figures; returns the diagnosis document."""
+    effects ``candidates``, no figures (and further config ``overrides``); returns the diagnosis
+    document."""
     from benchmark.core.harness import run_diagnosis
 
-    cfg = compose_config([f"data.path={folder}", f"candidates=[{','.join(candidates)}]", "figures=false"],
-                         name="diagnose")
+    cfg = compose_config([f"data.path={folder}", f"candidates=[{','.join(candidates)}]", "figures=false",
+                          *overrides], name="diagnose")
     return run_diagnosis(cfg, outdir)
 
 

@@ -107,6 +107,7 @@ class Selector:
             elif new:
                 head = [e.extra_starts(self.ctx)[0] for e in new[:-1]]
                 starts = [np.concatenate([x_prev, *head, s]) for s in new[-1].extra_starts(self.ctx)]
+                starts = self.profiled(model, starts, self.masks[f], range(len(prev.effects), len(effects)))
             else:
                 starts = [x_prev]
             best, best_ssr = None, np.inf
@@ -120,6 +121,29 @@ class Selector:
                                      starts_from.ssr_fold[f])
             xs[f] = best
         return self.cross_start(SetFit(model, xs, self.masks))
+
+    def profiled(self, model: JointModel, starts, mask, effects) -> list[np.ndarray]:
+        """``starts`` with the grid parameter of each of ``effects`` (indices into
+        ``model.effects``) that has one (:meth:`Effect.start_grid`) set to the grid value that
+        fits ``mask`` best, all values of a start evaluated in one batch; a start that no grid
+        value improves is kept, and starts that end equal are tried once."""
+        out = []
+        for x0 in starts:
+            x = np.asarray(x0, float)
+            for j in effects:
+                grid = model.effects[j].start_grid(self.ctx)
+                if grid is None:
+                    continue
+                col = model.slices[j].start + grid[0]
+                X = np.repeat(x[None, :], len(grid[1]) + 1, axis=0)
+                X[1:, col] = grid[1]
+                X = np.clip(X, model.lower, model.upper)
+                ssr = np.concatenate([np.sum(model.residuals(X[k:k + 64])[:, mask] ** 2, axis=1)
+                                      for k in range(0, len(X), 64)])
+                x = X[int(np.argmin(ssr))]  # row 0, the start as it was, wins ties
+            if not any(np.array_equal(x, y) for y in out):
+                out.append(x)
+        return out
 
     def cross_start(self, sf: SetFit, points=()) -> SetFit:
         """Each fold's fit refitted from the other fold's (and from ``points``, e.g. the fit on
@@ -191,6 +215,7 @@ class Selector:
                 progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
             model = self.model(list(chosen) + list(add))
             x0 = np.concatenate([cur.xs["A"]] + [e.extra_starts(self.ctx)[0] for e in add])
+            x0 = self.profiled(model, [x0], masks["A"], range(len(chosen), len(model.effects)))[0]
             x = model.fit(x0, masks["A"], self.settings.screen_iterations)
             x = self.converge(model, x, masks["A"], self.settings.screen_iterations, ssr_cur)
             chi2 = float(np.mean(model.residuals(x[None, :])[0][masks["B"]] ** 2))
