@@ -327,15 +327,17 @@ class JointModel:
             C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
         t = d.stop_t[None, :]
         w0 = d.stop_w0 if w0 is None else w0
+        w0 = np.broadcast_to(np.asarray(w0, float), (len(X), 1))
         with np.errstate(all="ignore"):
             tau = J / fv
             c = A / J
-            linear = (w0 + tau * c) * np.exp(-t / tau) - tau * c
-            q = np.sqrt((4 * A * C - fv**2).astype(complex))
-            Cs = np.where(C > 0, C, 1.0)
-            phi0 = np.arctan((2 * Cs * w0 + fv) / q)
-            quad = np.real((-fv + q * np.tan(phi0 - q * t / (2 * J))) / (2 * Cs))
-            w = np.where(C > 1e-15, quad, linear)
+            w = (w0 + tau * c) * np.exp(-t / tau) - tau * c
+            fan = C[:, 0] > 1e-15  # the complex closed form only where a fan load makes it quadratic
+            if np.any(fan):
+                Af, Cf, Jf, fvf, w0f = A[fan], C[fan], J[fan], fv[fan], w0[fan]
+                q = np.sqrt((4 * Af * Cf - fvf**2).astype(complex))
+                phi0 = np.arctan((2 * Cf * w0f + fvf) / q)
+                w[fan] = np.real((-fvf + q * np.tan(phi0 - q * t / (2 * Jf))) / (2 * Cf))
             stopped = np.cumsum(~(w > 0), axis=1) > 0
         return np.where(stopped, 0.0, w)
 
