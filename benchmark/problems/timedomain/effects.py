@@ -184,7 +184,10 @@ class MainSaturation(_Saturation):
     limited to 0.25 (``Llr/Lls <= 3``) the diagnosis of a direct-on-line start of motulator's
     saturated 2.2 kW example machine (``S = 7``) stopped at 1.54 times the noise (from 1.89,
     ``partly_explained``); with the Gamma end in reach, 1.011 (six-step: 3.02 -> 0.98), the
-    exponent found 7.0 (``tests/problems/timedomain/test_gamma_saturation.py``)."""
+    exponent found 7.0 (``tests/problems/timedomain/test_gamma_saturation.py``). Beside a
+    saturating leakage (``leakage_saturation`` in the same model) the curve sits at the
+    inverse-Gamma node and the share is not determined (standard error nan): the T mode has
+    no saturating leakage (``tests/problems/timedomain/test_two_saturations.py``)."""
 
     name = "main_saturation"
     size_name = "extra_magnetising_current"

@@ -395,7 +395,9 @@ class JointModel:
                 cov = hac_covariance(J, r0, groups=self.data.channel_labels(), aligned=False)
             except (ValueError, np.linalg.LinAlgError):
                 return np.full(len(x), np.nan)
-        return standard_errors(cov)
+        # a parameter the residuals do not depend on here (the magnetising node's place while
+        # the leakage saturates too) is not determined: nan, not the pseudo-inverse's 0
+        return np.where(np.any(J != 0.0, axis=0), standard_errors(cov), np.nan)
 
 
 def stop_mechanics(data: DiagnosisData, case: int):
