@@ -12,7 +12,6 @@ from __future__ import annotations
 import tempfile
 
 import numpy as np
-import pytest
 
 from benchmark.core.effects import load_effects
 from benchmark.problems.timedomain.data import load_startup_dataset
@@ -41,12 +40,12 @@ class _Both:
                 for b in self.parts[1].extra_starts(ctx)[:2]]
 
     def augment(self, rows, extras, ctx):
-        for e, s in zip(self.parts, self._split(ctx)):
+        for e, s in zip(self.parts, self._split(ctx), strict=True):
             rows = e.augment(rows, extras[:, s], ctx)
         return rows
 
     def measure(self, out, extras, ctx):
-        for e, s in zip(self.parts, self._split(ctx)):
+        for e, s in zip(self.parts, self._split(ctx), strict=True):
             out = e.measure(out, extras[:, s], ctx)
         return out
 
