@@ -225,9 +225,9 @@ class Selector:
             if progress:
                 progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
             model = self.model(list(chosen) + list(add))
-            x0 = np.concatenate([cur.xs["A"]] + [e.extra_starts(self.ctx)[0] for e in add])
+            first = np.concatenate([cur.xs["A"]] + [e.extra_starts(self.ctx)[0] for e in add])
             x, best = None, np.inf
-            for x0 in self.profiled(model, [x0], masks["A"], range(len(chosen), len(model.effects))):
+            for x0 in self.profiled(model, [first], masks["A"], range(len(chosen), len(model.effects))):
                 xf = model.fit(x0, masks["A"], self.settings.screen_iterations)
                 xf = self.converge(model, xf, masks["A"], self.settings.screen_iterations, ssr_cur)
                 s = model.ssr(xf, masks["A"])
