@@ -133,7 +133,7 @@ class Selector:
         and every start went there (motulator, 2.2 kW six-step start, blind seed 45 set 32: a
         step of 5.4 N m at 0.16 s became ``unexplained`` at 6.3 times the noise; from the starts as
         they were, explained, 6.34 -> 0.98)."""
-        out = []
+        moved = []
         for x0 in starts:
             x = np.asarray(x0, float)
             for j in effects:
@@ -147,10 +147,9 @@ class Selector:
                 ssr = np.concatenate([np.sum(model.residuals(X[k:k + 64])[:, mask] ** 2, axis=1)
                                       for k in range(0, len(X), 64)])
                 x = X[int(np.argmin(ssr))]  # row 0, the start as it was, wins ties
-            if not any(np.array_equal(x, y) for y in out):
-                out.append(x)
-        for x0 in starts:
-            x = np.asarray(x0, float)
+            moved.append(x)
+        out = []
+        for x in moved + [np.asarray(x0, float) for x0 in starts]:
             if not any(np.array_equal(x, y) for y in out):
                 out.append(x)
         return out
