@@ -18,6 +18,7 @@ from benchmark.core.uncertainty import (
     noise_std,
     standard_errors,
     uncertainty_warnings,
+    variance_sample_fraction,
     white_covariance,
 )
 
@@ -169,6 +170,29 @@ def test_quiet_noise_recovered_and_uncertainty_honest(phi):
     print(f"quiet phi={phi}: mean ratio", np.mean(est) / 0.3, "z std", np.std(z), "n_eff", ne.n_effective)
     assert abs(np.mean(est) / 0.3 - 1) < 0.02
     assert 0.7 <= np.std(z) <= 1.4
+
+
+def test_uncertainty_honest_for_white_plus_slow_coloured_noise():
+    """A sensor's white noise beside a slowly coloured interference (the validation plant's
+    current noise: white 0.02 + AR(1) 0.037 with pole 0.982): the lag-1 correlation is
+    small (0.76) but the tail is long. The AR(1) ``N_eff`` alone makes the stated uncertainty
+    three times too small; the summed autocorrelation keeps the z-spread near 1."""
+    rng = np.random.default_rng(11)
+    z, z_ar1 = [], []
+    for _ in range(200):
+        x = 0.02 * rng.standard_normal(6000) + ar1(rng, 6000, 0.982, 0.037)
+        ne = noise_from_quiet(x)
+        true = np.hypot(0.02, 0.037)
+        z.append((ne.std - true) / (true * ne.rel_uncertainty))
+        phi = 0.982 * 0.037**2 / true**2  # the mixture's lag-1 autocorrelation
+        z_ar1.append((ne.std - true) / (true / np.sqrt(2 * 6000 * (1 - phi**2) / (1 + phi**2))))
+    print("white + slow AR(1): z std", np.std(z), "with the AR(1) N_eff", np.std(z_ar1))
+    assert np.std(z_ar1) > 2.5  # the old N_eff: far too confident
+    assert 0.7 <= np.std(z) <= 1.4
+    # white and AR(1) noise: the summed autocorrelation agrees with Bartlett's AR(1) value
+    assert variance_sample_fraction(rng.standard_normal(20_000)) == pytest.approx(1.0, abs=0.02)
+    phi = 0.9
+    assert variance_sample_fraction(ar1(rng, 20_000, phi)) == pytest.approx((1 - phi**2) / (1 + phi**2), rel=0.15)
 
 
 def test_smooth_noise_white_and_coloured_bias():

@@ -34,6 +34,7 @@ from benchmark.core.uncertainty import (
     noise_from_quiet,
     noise_from_smooth,
     refine_frequency,
+    variance_sample_fraction,
 )
 
 #: Fallback relative uncertainty of the fourth-difference estimate.
@@ -141,7 +142,7 @@ def modulated_periodic_noise(x, fs: float, f0: float, order: int = 2, n_harmonic
     phi = ar1_coefficient(e)
     p_eff = min(float(np.sum(ar1_gain(phi, om))), n / 2)
     dof = max(n - p_eff, 1.0)
-    n_eff = dof * (1 - phi**2) / (1 + phi**2)
+    n_eff = dof * variance_sample_fraction(e)
     envelope = f"order {order}" if knot_periods is None else f"piecewise linear, knots every {knot_periods:g} periods"
     return NoiseEstimate(math.sqrt(float(e @ e) / dof), 1.0 / math.sqrt(2 * n_eff), n_eff,
                          f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)"), e
