@@ -143,6 +143,10 @@ class DiagnosisSettings:
     voltage_noise: bool = True
 
 
+#: Standard errors by which a base model's Coulomb friction must exceed
+#: ``DiagnosisSettings.load_friction_share`` to be called a held load (:func:`held_by_base`).
+HELD_LOAD_Z = 2.0
+
 #: Share of the estimated rated torque (:func:`estimated_rated_torque`) that the local fits may
 #: always give the friction, whatever the base identification says.
 FRICTION_FLOOR_SHARE = 0.03
@@ -193,10 +197,15 @@ def estimated_rated_torque(params: Mapping[str, float], ctx) -> float:
 
 
 def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettings,
-                 rated: float | None = None) -> list[dict]:
+                 rated: float | None = None, standard_errors: np.ndarray | None = None) -> list[dict]:
     """Effects the base model already holds under another name: a Coulomb friction above
     ``settings.load_friction_share`` of the rated torque ``rated`` (N m, from the nameplate),
-    or without one of :func:`estimated_rated_torque`, is a constant (passive) load torque."""
+    or without one of :func:`estimated_rated_torque`, is a constant (passive) load torque.
+
+    With ``standard_errors`` (of ``x``, N m for ``fc``) the friction must exceed the share by
+    :data:`HELD_LOAD_Z` standard errors: without a stop record the start-up alone leaves the
+    friction loosely determined (it trades with the inertia, an iron loss, the heating), and a
+    friction that could be the motor's own is not called a load."""
     if rated:
         scale, label = rated, "rated torque"
     else:
@@ -204,15 +213,19 @@ def held_by_base(names: list[str], x: np.ndarray, ctx, settings: DiagnosisSettin
         label = "rated torque estimated as 1/3 of the pull-out torque"
     if "fc" not in names or not scale or scale <= 0:
         return []
-    fc = float(x[names.index("fc")])
+    k = names.index("fc")
+    fc = float(x[k])
+    se = float(standard_errors[k]) if standard_errors is not None else 0.0
+    se = se if np.isfinite(se) else fc  # not determined: as uncertain as it is large
     share = fc / scale
-    if share <= settings.load_friction_share:
+    if (fc - HELD_LOAD_Z * se) / scale <= settings.load_friction_share:
         return []
-    return [{"effect": "load_torque", "form": "constant", "torque_Nm": fc, "share_of_scale": share,
-             "scale": label, "why": f"the base model's Coulomb friction, {fc:.4g} N m, is {100 * share:.0f} % of the "
-                                    f"{label} {scale:.4g} N m (a motor's own friction is 0.3-2 % of rated torque): a "
-                                    f"constant load torque, which acts as Coulomb friction does and cannot be told "
-                                    f"apart from it on this record"}]
+    return [{"effect": "load_torque", "form": "constant", "torque_Nm": fc, "standard_error_Nm": se,
+             "share_of_scale": share, "scale": label,
+             "why": f"the base model's Coulomb friction, {fc:.4g} +- {se:.2g} N m, is {100 * share:.0f} % of the "
+                    f"{label} {scale:.4g} N m (a motor's own friction is 0.3-2 % of rated torque): a "
+                    f"constant load torque, which acts as Coulomb friction does and cannot be told "
+                    f"apart from it on this record"}]
 
 
 def base_context(data: DiagnosisData, estimate: dict[str, float], dc_link_voltage: float | None):
@@ -416,7 +429,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         weak = chosen
         chosen = []
     loc = localise(data, base_fit.held, q_before.threshold)
-    base_x = full_x[:len(base.base_names)] if full_x is not None else base_full
+    k_base = len(base.base_names)  # the base parameters of the final model (fitted on all data)
+    base_x, base_se = (full_x[:k_base], se[:k_base]) if final.names else (base_full, base.standard_errors(base_full))
     doc = {
         "status": status,
         "verdict": verdict,
@@ -436,6 +450,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "ranking": next((r["candidates"] for r in rounds if "candidates" in r), []),
         "base": {"case": settings.base_case,
                  "estimate": dict(zip(base.base_names, map(float, base_x), strict=True)),
+                 "standard_errors": dict(zip(base.base_names, map(float, base_se), strict=True)),
                  "identification": base_estimate},
         "noise": {ch: {"std": float(v.std), "rel_uncertainty": float(v.rel_uncertainty), "method": v.method}
                   for ch, v in data.noise.items()},
@@ -444,7 +459,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "facts": {k: v for k, v in facts.items()},
         "conditioning": list(ds.conditioning),
         "removed_by_conditioning": list(ds.conditioning_removed),
-        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated_torque(ds.nameplate)),
+        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated_torque(ds.nameplate),
+                                     base_se),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
