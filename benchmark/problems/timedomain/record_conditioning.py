@@ -29,6 +29,7 @@ from benchmark.problems.timedomain.switch_on import (
     REST_GUARD_S,
     current_departure,
     detect_switch_on,
+    voltage_live_from_start,
     voltage_rises_before,
 )
 
@@ -430,6 +431,11 @@ def condition_record(v, i, ts: float, speed=None, *, f0: float | None = None, p:
     elif voltage_rises_before(v, k_on):
         notes.append(f"the voltage's magnitude rises steadily before its switch-on at {k_on * ts:.4f} s (a live "
                      f"low voltage, e.g. a V/f ramp from a boost voltage): no pre-trigger")
+        k_on = None
+    elif voltage_live_from_start(v, i, ts, k_on):
+        notes.append(f"the voltage before its switch-on at {k_on * ts:.4f} s is already near its magnitude there "
+                     f"and the currents move before it (a live low voltage from the first sample, e.g. a V/f "
+                     f"boost just under the contact level): no pre-trigger")
         k_on = None
     hard = [detect_clipping(x, clip_rel_tol) for x in i]
     masks = [detect_clipping(x, clip_rel_tol, ts=ts, f0=f0, start=k_on or 0) if soft else h

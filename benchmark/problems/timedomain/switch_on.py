@@ -172,6 +172,36 @@ def voltage_rises_before(v_phases, k_on: int | None) -> bool:
     return rise > max(LIVE_NOISE_K * se, LIVE_RISE_LEVEL * level)
 
 
+#: A stretch before the switch-on whose voltage magnitude (median) is at least this share of the
+#: magnitude at the switch-on, while the currents already move, is live (:func:`voltage_live_from_start`).
+LIVE_SHARE_OF_CONTACT = 0.5
+
+
+def voltage_live_from_start(v_phases, i, ts: float, k_on: int | None) -> bool:
+    """Whether the record is energised from its first sample although the switch-on was found
+    later: the voltage magnitude before ``k_on`` is already :data:`LIVE_SHARE_OF_CONTACT` of
+    the magnitude at ``k_on``, and the currents leave their rest level (:func:`current_departure`)
+    more than three samples before it.
+
+    An inverter's V/f start whose boost sits just under the contact level (the independent
+    plant's 3.7 kW PWM start, blind seed 50, set 4: 14.4 V at the first sample, 15.2 V at the 5 %
+    contact level 24 samples later) neither rises by 1 % of the level through the stretch
+    (:func:`voltage_rises_before`) nor drives its current away more than 2 ms before the contact
+    (the current leaves rest at the 6th sample); trimmed as a pre-trigger, the record lost its
+    first 14 samples and 1.3 A of current, and the model, started from rest, missed the data by
+    0.3 A rms over the first 50 ms at the true parameters. A contactor's pre-trigger holds
+    offsets of a few volts (far under the first contact's magnitude) and no current.
+
+    ``v_phases`` (3, n) V, ``i`` (2, n) A, ``ts`` s."""
+    if k_on is None or k_on < 8:
+        return False
+    m = _magnitude(np.asarray(v_phases, dtype=float))
+    if not float(np.median(m[:k_on])) >= LIVE_SHARE_OF_CONTACT * float(m[k_on]):
+        return False
+    k_rest = current_departure(i, ts, k_on)
+    return k_rest is not None and k_rest < k_on - 3
+
+
 #: A change of the voltage space vector between two samples that departs from the smooth change
 #: of its neighbours by more than this fraction of the energised level is a switching step.
 STEP_LEVEL = 0.05
