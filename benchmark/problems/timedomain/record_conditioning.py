@@ -432,7 +432,7 @@ def condition_record(v, i, ts: float, speed=None, *, f0: float | None = None, p:
         notes.append(f"the voltage's magnitude rises steadily before its switch-on at {k_on * ts:.4f} s (a live "
                      f"low voltage, e.g. a V/f ramp from a boost voltage): no pre-trigger")
         k_on = None
-    elif voltage_live_from_start(v, i, ts, k_on):
+    elif voltage_live_from_start(v, k_on, k_rest):
         notes.append(f"the voltage before its switch-on at {k_on * ts:.4f} s is already near its magnitude there "
                      f"and the currents move before it (a live low voltage from the first sample, e.g. a V/f "
                      f"boost just under the contact level): no pre-trigger")

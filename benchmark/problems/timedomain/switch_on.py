@@ -177,11 +177,11 @@ def voltage_rises_before(v_phases, k_on: int | None) -> bool:
 LIVE_SHARE_OF_CONTACT = 0.5
 
 
-def voltage_live_from_start(v_phases, i, ts: float, k_on: int | None) -> bool:
+def voltage_live_from_start(v_phases, k_on: int | None, k_rest: int | None) -> bool:
     """Whether the record is energised from its first sample although the switch-on was found
     later: the voltage magnitude before ``k_on`` is already :data:`LIVE_SHARE_OF_CONTACT` of
-    the magnitude at ``k_on``, and the currents leave their rest level (:func:`current_departure`)
-    more than three samples before it.
+    the magnitude at ``k_on``, and the currents leave their rest level (``k_rest``, from
+    :func:`current_departure`) more than three samples before it.
 
     An inverter's V/f start whose boost sits just under the contact level (the independent
     plant's 3.7 kW PWM start, blind seed 50, set 4: 14.4 V at the first sample, 15.2 V at the 5 %
@@ -192,13 +192,12 @@ def voltage_live_from_start(v_phases, i, ts: float, k_on: int | None) -> bool:
     0.3 A rms over the first 50 ms at the true parameters. A contactor's pre-trigger holds
     offsets of a few volts (far under the first contact's magnitude) and no current.
 
-    ``v_phases`` (3, n) V, ``i`` (2, n) A, ``ts`` s."""
+    ``v_phases`` (3, n) V."""
     if k_on is None or k_on < 8:
         return False
     m = _magnitude(np.asarray(v_phases, dtype=float))
     if not float(np.median(m[:k_on])) >= LIVE_SHARE_OF_CONTACT * float(m[k_on]):
         return False
-    k_rest = current_departure(i, ts, k_on)
     return k_rest is not None and k_rest < k_on - 3
 
 

@@ -256,14 +256,14 @@ def test_a_boost_just_under_the_contact_level_is_no_pre_trigger():
     k_rest = current_departure(i, ts, k)
     assert k_rest is not None and k_rest >= k - max(3, round(REST_GUARD_S / ts))  # the old rest guard misses it
     assert not voltage_rises_before(v, k)  # and so does the rise check
-    assert voltage_live_from_start(v, i, ts, k)
+    assert voltage_live_from_start(v, k, k_rest)
     rec, rep = condition_record(v, i, ts, f0=60.0)
     assert rep.switch_on is None and rec.first == 0
     assert any("just under the contact level" in n for n in rep.notes), rep.notes
     # a contactor's pre-trigger with voltage offsets of a few volts and no current is still one
     v2, i2, _, _ = record()
     k2 = detect_switch_on(v2, TS)
-    assert not voltage_live_from_start(v2 + 4.0, i2, TS, k2)
+    assert not voltage_live_from_start(v2 + 4.0, k2, current_departure(i2, TS, k2))
     assert condition_record(v2 + 4.0, i2, TS, f0=F0)[1].switch_on is not None
 
 
