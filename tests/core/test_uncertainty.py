@@ -1,4 +1,4 @@
-"""benchmark.core.uncertainty: HAC standard errors, noise estimates for coloured noise, warnings."""
+"""benchmark.core.uncertainty and noise_estimates: HAC standard errors, noise estimates for coloured noise, warnings."""
 
 from __future__ import annotations
 
@@ -6,19 +6,21 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from benchmark.core.uncertainty import (
-    FitQuality,
+from benchmark.core.noise_estimates import (
     NoiseEstimate,
-    correlation,
-    hac_covariance,
-    misfit_ratio,
     noise_from_periodic,
     noise_from_quiet,
     noise_from_smooth,
     noise_std,
+    variance_sample_fraction,
+)
+from benchmark.core.uncertainty import (
+    FitQuality,
+    correlation,
+    hac_covariance,
+    misfit_ratio,
     standard_errors,
     uncertainty_warnings,
-    variance_sample_fraction,
     white_covariance,
 )
 

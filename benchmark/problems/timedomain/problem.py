@@ -175,7 +175,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
 
     # -- noise, fit quality and warnings (benchmark.core.quality) ----------------------------
     def channel_noise(self) -> list[list]:
-        """Per record, the noise estimate (:class:`benchmark.core.uncertainty.NoiseEstimate`) of
+        """Per record, the noise estimate (:class:`benchmark.core.noise_estimates.NoiseEstimate`) of
         i_alpha, i_beta and speed (None where not measured or not estimable), from the data alone:
         a constant + linear trend + every harmonic of the supply frequency below Nyquist (at most
         200) fitted over the last
@@ -190,7 +190,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         of the channel's RMS."""
         if self._noise is not None:
             return self._noise
-        from benchmark.core.uncertainty import NoiseEstimate
+        from benchmark.core.noise_estimates import NoiseEstimate
         from benchmark.problems.timedomain.diagnosis.noise import startup_noise
 
         fs = 1.0 / self.dataset.sample_time
@@ -372,12 +372,12 @@ PERIODS_PER_BLOCK = 4
 
 
 def _blockwise_periodic_noise(x, fs: float, f0: float):
-    """Noise of a nearly periodic segment: :func:`benchmark.core.uncertainty.noise_from_periodic`
+    """Noise of a nearly periodic segment: :func:`benchmark.core.noise_estimates.noise_from_periodic`
     (constant, trend, every harmonic below Nyquist up to 200) on consecutive blocks of
     ``PERIODS_PER_BLOCK`` supply periods, pooled (variances weighted by their degrees of
     freedom). Short blocks follow a slowly changing amplitude (a start that has not quite
     settled) that one fit over the whole segment would count as noise."""
-    from benchmark.core.uncertainty import NoiseEstimate, noise_from_periodic, refine_frequency
+    from benchmark.core.noise_estimates import NoiseEstimate, noise_from_periodic, refine_frequency
 
     x = np.asarray(x, float)
     nh = min(200, int(0.5 * fs / f0))

@@ -458,7 +458,8 @@ def verdict_contract(settings, held: dict, chosen: str, n_readings: int) -> dict
     :func:`benchmark.core.uncertainty.misfit_ratio`. The noise of G and B comes from third
     differences of the base residual (a median: relative uncertainty about ``1.17 / sqrt(n)``).
     One effect at most is chosen on a sweep (no forward selection yet)."""
-    from benchmark.core.uncertainty import NoiseEstimate, misfit_ratio
+    from benchmark.core.noise_estimates import NoiseEstimate
+    from benchmark.core.uncertainty import misfit_ratio
 
     u = 1.17 / math.sqrt(max(n_readings, 1))
     noise = NoiseEstimate(1.0, u, 2.0 * n_readings, "third differences of the base residual")

@@ -22,7 +22,8 @@ import numpy as np
 from scipy import optimize
 
 from benchmark.core.effects import Effect, EffectContext
-from benchmark.core.uncertainty import NoiseEstimate, hac_covariance, standard_errors
+from benchmark.core.noise_estimates import NoiseEstimate
+from benchmark.core.uncertainty import hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch, valid_rows

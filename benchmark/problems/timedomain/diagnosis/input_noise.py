@@ -30,7 +30,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from benchmark.core.uncertainty import NoiseEstimate
+from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 from benchmark.problems.timedomain.diagnosis.noise import voltage_noise
 

@@ -2,12 +2,12 @@
 
 Where the record has a pre-trigger (samples before the supply is switched on: voltage and
 current at rest), every channel's noise is the spread of that quiet segment
-(:func:`benchmark.core.uncertainty.noise_from_quiet`, unbiased for AR(1) noise). Otherwise:
+(:func:`benchmark.core.noise_estimates.noise_from_quiet`, unbiased for AR(1) noise). Otherwise:
 
 * currents: the end of the start-up, least-squares fitted by the supply's harmonics, each
   with an amplitude that may still drift as a quadratic in time
   (:func:`noise_from_modulated_periodic`, the same degrees-of-freedom correction for
-  coloured noise as :func:`benchmark.core.uncertainty.noise_from_periodic`); what is left,
+  coloured noise as :func:`benchmark.core.noise_estimates.noise_from_periodic`); what is left,
   coloured noise included, is the noise. A record that ends before its steady state (the
   speed still moving at its end) has a current falling faster than a quadratic follows, and
   the quadratic fit's residual holds the signal (five times the noise on an independent-plant
@@ -26,15 +26,15 @@ import math
 
 import numpy as np
 
-from benchmark.core.uncertainty import (
+from benchmark.core.noise_estimates import (
     NoiseEstimate,
     ar1_coefficient,
     ar1_gain,
+    estimate_noise,
     least_squares_solve,
     noise_from_quiet,
     noise_from_smooth,
     refine_frequency,
-    variance_sample_fraction,
 )
 
 #: Fallback relative uncertainty of the fourth-difference estimate.
@@ -129,7 +129,7 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
     spread of :func:`modulated_periodic_residual`. Each column at ``omega`` absorbs
     ``g(omega)`` noise degrees of freedom (``g`` the AR(1) spectrum of the residual relative to
     white), so the variance is divided by ``N - sum g`` and ``N_eff = (N - sum g)(1 - phi^2)/(1 + phi^2)``
-    as in :func:`benchmark.core.uncertainty.noise_from_periodic`."""
+    as in :func:`benchmark.core.noise_estimates.noise_from_periodic`."""
     return modulated_periodic_noise(x, fs, f0, order, n_harmonics, rel_line, knot_periods)[0]
 
 
@@ -138,14 +138,10 @@ def modulated_periodic_noise(x, fs: float, f0: float, order: int = 2, n_harmonic
                              knot_periods: float | None = None) -> tuple[NoiseEstimate, np.ndarray]:
     """:func:`noise_from_modulated_periodic` and the residual it is the spread of (one fit)."""
     e, om, kept = modulated_periodic_residual(x, fs, f0, order, n_harmonics, rel_line, knot_periods)
-    n = len(e)
     phi = ar1_coefficient(e)
-    p_eff = min(float(np.sum(ar1_gain(phi, om))), n / 2)
-    dof = max(n - p_eff, 1.0)
-    n_eff = dof * variance_sample_fraction(e)
+    p_eff = min(float(np.sum(ar1_gain(phi, om))), len(e) / 2)
     envelope = f"order {order}" if knot_periods is None else f"piecewise linear, knots every {knot_periods:g} periods"
-    return NoiseEstimate(math.sqrt(float(e @ e) / dof), 1.0 / math.sqrt(2 * n_eff), n_eff,
-                         f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)"), e
+    return estimate_noise(e, p_eff, f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)"), e
 
 
 def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndarray, i_beta: np.ndarray) -> int:

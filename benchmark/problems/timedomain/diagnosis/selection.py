@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from benchmark.core.effects import Effect
-from benchmark.core.uncertainty import ar1_coefficient
+from benchmark.core.noise_estimates import ar1_coefficient
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 
 
