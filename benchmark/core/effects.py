@@ -135,6 +135,13 @@ class Effect:
         lo, hi = self.extra_bounds(ctx)
         return [lo + 0.25 * (hi - lo)]
 
+    def starts_from_base(self, base: dict[str, float], ctx: EffectContext) -> list[tuple[dict[str, float], np.ndarray]]:
+        """Starts that move part of what the fitted base model ``base`` (parameter name -> value,
+        e.g. ``fc`` in N m) holds into this effect, as ``(base parameters to set, extras)``
+        pairs: where the base has already absorbed the effect's signature under another name,
+        a start with the effect at zero leaves the fit in the base's basin. None by default."""
+        return []
+
     def start_grid(self, ctx: EffectContext) -> tuple[int, np.ndarray] | None:
         """An extra parameter that a local fit cannot be trusted to find from afar (an instant
         whose one-sample edge gives a gradient only close to it), as ``(index among the extras,

@@ -92,8 +92,7 @@ class Selector:
 
     def fit_set(self, effects, starts_from: SetFit, drop: int | None = None) -> SetFit:
         """Fit base + ``effects`` on each fold, from ``starts_from``'s fold fits plus the new
-        effects' starting values (every start of the last new one, the first of the others), or
-        minus effect ``drop``'s parameters."""
+        effects' starting values (:meth:`starts_with`), or minus effect ``drop``'s parameters."""
         model = self.model(effects)
         prev = starts_from.model
         new = list(effects)[len(prev.effects):]
@@ -105,9 +104,8 @@ class Selector:
                 keep[prev.slices[drop]] = False
                 starts = [x_prev[keep]]
             elif new:
-                head = [e.extra_starts(self.ctx)[0] for e in new[:-1]]
-                starts = [np.concatenate([x_prev, *head, s]) for s in new[-1].extra_starts(self.ctx)]
-                starts = self.profiled(model, starts, self.masks[f], range(len(prev.effects), len(effects)))
+                starts = self.profiled(model, self.starts_with(model, x_prev, new), self.masks[f],
+                                       range(len(prev.effects), len(effects)))
             else:
                 starts = [x_prev]
             best, best_ssr = None, np.inf
@@ -121,6 +119,28 @@ class Selector:
                                      starts_from.ssr_fold[f])
             xs[f] = best
         return self.cross_start(SetFit(model, xs, self.masks))
+
+    def starts_with(self, model: JointModel, x_prev: np.ndarray, new, every: bool = True) -> list[np.ndarray]:
+        """Starts of ``model`` (``x_prev``'s effects followed by the effects ``new``): ``x_prev``
+        and the new effects' starting values (every start of the last new one, or with
+        ``every`` False only its first; the first of the others), then, for each new effect
+        that has them, the starts that move part of the base into it
+        (:meth:`Effect.starts_from_base`, judged on ``x_prev``'s base)."""
+        head = [e.extra_starts(self.ctx)[0] for e in new[:-1]]
+        last = new[-1].extra_starts(self.ctx)
+        starts = [np.concatenate([x_prev, *head, s]) for s in (last if every else last[:1])]
+        k_base = len(model.base_names)
+        base = dict(zip(model.base_names, map(float, x_prev[:k_base]), strict=True))
+        first_new = len(model.effects) - len(new)
+        for j, eff in enumerate(new):
+            for setting, extras in eff.starts_from_base(base, self.ctx):
+                x = starts[0].copy()
+                for name, value in setting.items():
+                    if name in model.base_names:
+                        x[model.base_names.index(name)] = value
+                x[model.slices[first_new + j]] = extras
+                starts.append(np.clip(x, model.lower, model.upper))
+        return starts
 
     def profiled(self, model: JointModel, starts, mask, effects) -> list[np.ndarray]:
         """``starts`` with the grid parameter of each of ``effects`` (indices into
@@ -224,9 +244,9 @@ class Selector:
             if progress:
                 progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
             model = self.model(list(chosen) + list(add))
-            first = np.concatenate([cur.xs["A"]] + [e.extra_starts(self.ctx)[0] for e in add])
+            first = self.starts_with(model, cur.xs["A"], list(add), every=False)
             x, best = None, np.inf
-            for x0 in self.profiled(model, [first], masks["A"], range(len(chosen), len(model.effects))):
+            for x0 in self.profiled(model, first, masks["A"], range(len(chosen), len(model.effects))):
                 xf = model.fit(x0, masks["A"], self.settings.screen_iterations)
                 xf = self.converge(model, xf, masks["A"], self.settings.screen_iterations, ssr_cur)
                 s = model.ssr(xf, masks["A"])
