@@ -244,9 +244,9 @@ class Selector:
             if progress:
                 progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
             model = self.model(list(chosen) + list(add))
-            first = self.starts_with(model, cur.xs["A"], list(add), every=False)
+            starts = self.starts_with(model, cur.xs["A"], list(add), every=False)
             x, best = None, np.inf
-            for x0 in self.profiled(model, first, masks["A"], range(len(chosen), len(model.effects))):
+            for x0 in self.profiled(model, starts, masks["A"], range(len(chosen), len(model.effects))):
                 xf = model.fit(x0, masks["A"], self.settings.screen_iterations)
                 xf = self.converge(model, xf, masks["A"], self.settings.screen_iterations, ssr_cur)
                 s = model.ssr(xf, masks["A"])
