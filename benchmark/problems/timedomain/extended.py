@@ -25,8 +25,10 @@ So ``e = (i_s + i_2 + j w psi_M/R_r1 - i_M)/(1/R_r1 + g_fe)``. Torque
 ``T = 1.5 p (psi_s x i_s)``; mechanics as in the base model (viscous ``fv``, Coulomb ``fc``
 with stiction). Resistances follow the copper law ``R (1 + alpha theta)``, with the
 temperature rise driven by the copper losses: ``d theta/dt = h_th * P_cu`` (``h_th`` = 1/heat
-capacity, K/J). Inverter drop: each phase loses ``U_d tanh(i_x/i_0)`` (``i_0 = 0``: a hard
-sign), transformed to alpha-beta.
+capacity, K/J); the rotor's rise is ``(1 + th_rotor) theta`` (a rotor cage of smaller heat
+capacity, or holding more of the start's losses, rises faster than the stator winding).
+Inverter drop: each phase loses ``U_d tanh(i_x/i_0)`` (``i_0 = 0``: a hard sign), transformed
+to alpha-beta.
 
 Bench effects (appended fields, all neutral at zero):
 
@@ -216,9 +218,10 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     v_a = v_a - c[21]
     v_b = v_b - c[22]
     heat = 1.0 + alpha * th
+    heat_r = 1.0 + alpha * th * (1.0 + c[38])
     Rs_t = Rs * heat
-    R_r1_t = R_r1 * heat
-    R_r2_t = R_r2 * heat
+    R_r1_t = R_r1 * heat_r
+    R_r2_t = R_r2 * heat_r
     d_a = ps_a - pm_a
     d_b = ps_b - pm_b
     g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_

@@ -53,6 +53,7 @@ EXTENDED_FIELDS = (
     "ls_floor",  # -, leakage saturation: share of the leakage that never saturates (0: none)
     "t_split",  # -, Llr/Lls of the T circuit whose magnetising node saturates (0: the inverse-Gamma node)
     "backlash",  # rad, half-width of a two-mass coupling's free play (0: none)
+    "th_rotor",  # -, rotor temperature rise per stator rise, less 1 (0: both windings rise alike)
 )
 N_EXT = len(EXTENDED_FIELDS)
 IDX = {name: k for k, name in enumerate(EXTENDED_FIELDS)}
@@ -117,6 +118,7 @@ def valid_rows(rows: np.ndarray) -> np.ndarray:
         ok &= r[:, IDX[name]] >= 0
     ok &= r[:, IDX["ls_floor"]] < 1
     ok &= r[:, IDX["t_split"]] >= 0
+    ok &= r[:, IDX["th_rotor"]] >= -1
     ok &= (r[:, IDX["R_r2"]] == 0) | (r[:, IDX["L_sigma2"]] > 0)
     ok &= r[:, IDX["w_ref"]] > 0
     ok &= (r[:, IDX["J_l"]] == 0) | (r[:, IDX["k_sh"]] > 0)

@@ -99,7 +99,7 @@ def test_augmentations_combine_without_overwriting_each_other():
     rows = base_rows(PAPER_MOTOR.vector()[None], 1)
     picks = {"double_cage": np.array([0.8, 0.004]), "main_saturation": np.array([0.2, 6.0, 0.05, 0.5]),
              "iron_loss": np.array([0.02, 0.5]), "leakage_saturation": np.array([1.0, 2.0, 0.3]),
-             "temperature_drift": np.array([10.0]), "inverter_drop": np.array([0.02]),
+             "temperature_drift": np.array([10.0, 0.5]), "inverter_drop": np.array([0.02]),
              "sensor_offset": np.array([0.01, -0.01, 0.0, 0.0]), "two_mass": np.array([80.0, 1.0, 0.05, 0.002]),
              "load_torque": np.array([0.1, 0.1, 0.2, 0.5])}
     alone = {n: EFFECTS[n].augment(rows, x[None], ctx) for n, x in picks.items()}
@@ -427,3 +427,33 @@ def test_two_augmentations_fit_two_effects_of_the_independent_plant(effects, for
           f"{_excess(aug['noisy'], floor['noisy']):.3f}, removed {removed:.3f}; base parameters "
           f"{np.round(100 * (np.exp(x[:5]) - 1), 2)} % off the plant's")
     assert removed >= share
+
+
+def test_rotor_heats_by_its_own_factor():
+    """``rotor_heating`` c: at a winding temperature rise theta the rotor resistance is
+    ``R_r (1 + alpha (1 + c) theta)``, the stator's ``R_s (1 + alpha theta)``: the state's
+    derivative equals that of a row without c whose rotor resistance is scaled by the ratio."""
+    from benchmark.problems.timedomain.extended import IDX, _derivative
+
+    eff = EFFECTS["temperature_drift"]
+    ctx = _ctx()
+    row = eff.augment(base_rows(PAPER_MOTOR.vector()[None], 1), np.array([[12.0, 0.8]]), ctx)[0]
+    theta = 15.0
+    x = np.array([0.3, -0.2, 0.25, -0.1, 0.0, 0.0, 120.0, theta, 0.0, 0.0])
+    alpha = row[IDX["alpha_th"]]
+    same = row.copy()
+    same[IDX["th_rotor"]] = 0.0
+    same[IDX["R_r1"]] *= (1 + alpha * 1.8 * theta) / (1 + alpha * theta)
+    out_c, out_same = np.zeros(10), np.zeros(10)
+    t_c = _derivative(row, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_c)
+    t_same = _derivative(same, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_same)
+    np.testing.assert_allclose(out_c, out_same, rtol=1e-12)
+    assert t_c == pytest.approx(t_same, rel=1e-12)
+    plain = row.copy()
+    plain[IDX["th_rotor"]] = 0.0
+    out_plain = np.zeros(10)
+    _derivative(plain, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_plain)
+    assert abs(out_plain[2] - out_c[2]) > 1e-3 * abs(out_c[2])  # the factor moves the rotor's EMF
+    cold_rotor = row.copy()
+    cold_rotor[IDX["th_rotor"]] = -1.5  # a rotor that cools as the stator warms: not a valid row
+    assert valid_rows(row[None]).all() and not valid_rows(cold_rotor[None]).all()
