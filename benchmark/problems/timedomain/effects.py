@@ -310,7 +310,7 @@ class TemperatureDrift(Effect):
     size_unit = "K"
     realistic = (4.0, 20.0)
     extra_names = ("heating", "rotor_heating")
-    physics = "winding resistances rise during the test (copper law, one-body thermal model)"
+    physics = "winding resistances rise during the test (copper law; the rotor by its own factor)"
     shows_in = "residual that grows with test time"
 
     def plant(self, row, size, ctx, form=None):

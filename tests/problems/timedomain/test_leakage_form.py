@@ -18,13 +18,11 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from benchmark.core.effects import EffectContext, load_effects
+from benchmark.core.effects import load_effects
 from synthetic.independent.curves import LeakageCurve
-from tests.conftest import PAPER_MOTOR
+from tests.problems.timedomain.test_effects import _ctx
 
-CTX = EffectContext(w_e=2 * np.pi * 50, V1=191.0, I_peak=28.0, w_sync=2 * np.pi * 50, dc_link_voltage=300.0,
-                    E_cu=600.0, L_M=PAPER_MOTOR.Ls - PAPER_MOTOR.Le, L_sigma=PAPER_MOTOR.Le, sample_time=1 / 12000,
-                    duration=0.3, pole_pairs=1, J=PAPER_MOTOR.J, T_acc=5.0)
+CTX = _ctx()  # the paper motor's context of the effect tests (28 A start-up peak)
 
 
 def rms_fit(form: str, ratio: float, linear_share: float) -> float:
