@@ -9,9 +9,9 @@ written in the inverse-Gamma form (``L_sigma = Le``, ``L_M = Ls - Le``,
 States (stator frame, amplitude-invariant, SI): stator flux ``psi_s`` (2), magnetising flux
 ``psi_M`` (2), flux of the second rotor branch ``psi_2`` (2), electrical speed ``w``, winding
 temperature rise ``theta`` (K), load-side speed ``w_l`` (mechanical rad/s) and coupling
-twist (rad) of a two-mass shaft.
+twist (rad) of a two-mass shaft, flux of the third rotor branch ``psi_3`` (2).
 
-Branches on the magnetising node (KCL ``i_M(psi_M) = i_s + i_1 + i_2 + i_fe``):
+Branches on the magnetising node (KCL ``i_M(psi_M) = i_s + i_1 + i_2 + i_3 + i_fe``):
 
 * stator: ``d psi_s/dt = v - v_drop(i_s) - Rs(theta) i_s``,
   ``i_s = (psi_s - psi_M)/L_sigma * (1 + ls_k (|psi_s - psi_M|/ls_psi)^ls_exp)`` (leakage saturation);
@@ -19,9 +19,12 @@ Branches on the magnetising node (KCL ``i_M(psi_M) = i_s + i_1 + i_2 + i_fe``):
 * rotor cage 1 (no leakage): ``0 = R_r1 i_1 + e - j w psi_M`` with ``e = d psi_M/dt``;
 * rotor cage 2 (double cage / deep bar): ``d psi_2/dt = -R_r2 i_2 + j w psi_2``,
   ``i_2 = (psi_2 - psi_M)/L_sigma2`` (absent when ``R_r2 = 0``);
+* rotor loop 3 (``R_r3``, ``L_sigma3``), the same equations as cage 2: three parallel loops
+  make the impedance of a deep bar (a distributed ladder) to a small fraction of a per cent,
+  where two loops leave some tenths of a per cent, several times the current noise of a start;
 * iron: a stationary loss conductance ``g_fe`` on the node: ``i_fe = -g_fe e``.
 
-So ``e = (i_s + i_2 + j w psi_M/R_r1 - i_M)/(1/R_r1 + g_fe)``. Torque
+So ``e = (i_s + i_2 + i_3 + j w psi_M/R_r1 - i_M)/(1/R_r1 + g_fe)``. Torque
 ``T = 1.5 p (psi_s x i_s)``; mechanics as in the base model (viscous ``fv``, Coulomb ``fc``
 with stiction). Resistances follow the copper law ``R (1 + alpha theta)``, with the
 temperature rise driven by the copper losses: ``d theta/dt = h_th * P_cu`` (``h_th`` = 1/heat
@@ -84,7 +87,7 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
 )
 from benchmark.problems.timedomain.simulation import substep_voltages
 
-N_STATES = 10
+N_STATES = 12
 SQRT3_2 = math.sqrt(3.0) / 2.0
 
 
@@ -222,6 +225,8 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     Rs_t = Rs * heat
     R_r1_t = R_r1 * heat_r
     R_r2_t = R_r2 * heat_r
+    R_r3, Ls3 = c[39], c[40]
+    R_r3_t = R_r3 * heat_r
     d_a = ps_a - pm_a
     d_b = ps_b - pm_b
     g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_
@@ -233,16 +238,29 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     else:
         i2_a = 0.0
         i2_b = 0.0
+    p3_a, p3_b = x[10], x[11]
+    if R_r3 > 0.0:
+        i3_a = (p3_a - pm_a) / Ls3
+        i3_b = (p3_b - pm_b) / Ls3
+    else:
+        i3_a = 0.0
+        i3_b = 0.0
     if _t_mode(c):
         is_a, is_b, ir_a, ir_b, g0 = _t_solve(c, x)
         if R_r2 > 0.0:  # cage 2 on the rotor node, in T units
             i2_a = g0 * (p2_a - pm_a) / Ls2
             i2_b = g0 * (p2_b - pm_b) / Ls2
-        e_a = -(R_r1_t / g0) * (ir_a - i2_a) - w * pm_b
-        e_b = -(R_r1_t / g0) * (ir_b - i2_b) + w * pm_a
-        if R_r2 > 0.0:  # back to inverse-Gamma units for the cage-2 equation below
+        if R_r3 > 0.0:
+            i3_a = g0 * (p3_a - pm_a) / Ls3
+            i3_b = g0 * (p3_b - pm_b) / Ls3
+        e_a = -(R_r1_t / g0) * (ir_a - i2_a - i3_a) - w * pm_b
+        e_b = -(R_r1_t / g0) * (ir_b - i2_b - i3_b) + w * pm_a
+        if R_r2 > 0.0:  # back to inverse-Gamma units for the cage equations below
             i2_a = i2_a / g0
             i2_b = i2_b / g0
+        if R_r3 > 0.0:
+            i3_a = i3_a / g0
+            i3_b = i3_b / g0
     else:
         pm = math.sqrt(pm_a * pm_a + pm_b * pm_b)
         sm = _sat(pm, ms_k, ms_psi, ms_exp)
@@ -252,8 +270,8 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
         im_a = pm_a * gm
         im_b = pm_b * gm
         inv_g = 1.0 / (1.0 / R_r1_t + gfe)
-        e_a = (is_a + i2_a - w * pm_b / R_r1_t - im_a) * inv_g
-        e_b = (is_b + i2_b + w * pm_a / R_r1_t - im_b) * inv_g
+        e_a = (is_a + i2_a + i3_a - w * pm_b / R_r1_t - im_a) * inv_g
+        e_b = (is_b + i2_b + i3_b + w * pm_a / R_r1_t - im_b) * inv_g
     # inverter drop: per phase, then amplitude-invariant Clarke
     if Ud > 0.0:
         i_r = is_a
@@ -279,6 +297,12 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     else:
         out[4] = 0.0
         out[5] = 0.0
+    if R_r3 > 0.0:
+        out[10] = -R_r3_t * i3_a - w * p3_b
+        out[11] = -R_r3_t * i3_b + w * p3_a
+    else:
+        out[10] = 0.0
+        out[11] = 0.0
     t_m = 1.5 * p * (ps_a * is_b - ps_b * is_a)
     J_l = c[31]
     if J_l > 0.0:
@@ -310,7 +334,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
         i1_a = (-w * pm_b - e_a) / R_r1_t
         i1_b = (w * pm_a - e_b) / R_r1_t
         p_cu = 1.5 * (Rs_t * (is_a * is_a + is_b * is_b) + R_r1_t * (i1_a * i1_a + i1_b * i1_b)
-                      + R_r2_t * (i2_a * i2_a + i2_b * i2_b))
+                      + R_r2_t * (i2_a * i2_a + i2_b * i2_b) + R_r3_t * (i3_a * i3_a + i3_b * i3_b))
         out[7] = h_th * p_cu
     else:
         out[7] = 0.0

@@ -54,6 +54,8 @@ EXTENDED_FIELDS = (
     "t_split",  # -, Llr/Lls of the T circuit whose magnetising node saturates (0: the inverse-Gamma node)
     "backlash",  # rad, half-width of a two-mass coupling's free play (0: none)
     "th_rotor",  # -, rotor temperature rise per stator rise, less 1 (0: both windings rise alike)
+    "R_r3",  # ohm, rotor loop 3 (a deep bar's third current path); 0 = absent
+    "L_sigma3",  # H, leakage of rotor loop 3
 )
 N_EXT = len(EXTENDED_FIELDS)
 IDX = {name: k for k, name in enumerate(EXTENDED_FIELDS)}
@@ -113,13 +115,14 @@ def valid_rows(rows: np.ndarray) -> np.ndarray:
     ok = np.all(np.isfinite(r), axis=1)
     for name in ("Rs", "L_sigma", "L_M", "R_r1", "J", "ms_psi", "ls_psi"):
         ok &= r[:, IDX[name]] > 0
-    for name in ("R_r2", "g_fe", "ms_k", "ls_k", "U_d", "i_0", "h_th", "fv", "fc", "ms_k2", "T_L", "T_q", "T_s",
+    for name in ("R_r2", "R_r3", "g_fe", "ms_k", "ls_k", "U_d", "i_0", "h_th", "fv", "fc", "ms_k2", "T_L", "T_q", "T_s",
                  "t_rise", "J_l", "k_sh", "c_sh", "g_fe_s", "ls_floor", "backlash"):
         ok &= r[:, IDX[name]] >= 0
     ok &= r[:, IDX["ls_floor"]] < 1
     ok &= r[:, IDX["t_split"]] >= 0
     ok &= r[:, IDX["th_rotor"]] >= -1
     ok &= (r[:, IDX["R_r2"]] == 0) | (r[:, IDX["L_sigma2"]] > 0)
+    ok &= (r[:, IDX["R_r3"]] == 0) | (r[:, IDX["L_sigma3"]] > 0)
     ok &= r[:, IDX["w_ref"]] > 0
     ok &= (r[:, IDX["J_l"]] == 0) | (r[:, IDX["k_sh"]] > 0)
     return ok

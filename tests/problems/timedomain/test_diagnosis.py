@@ -263,7 +263,7 @@ def test_a_record_without_speed_sensor_leaves_the_speed_out_of_the_residuals():
     est = dict(Rs=4.96434, Ls=0.1075, Le=0.01098, Rr=1.55618, J=0.00642, fv=0.00033, fc=0.04297)
     ctx = base_context(data, est, ds.dc_link_voltage)
     model = JointModel(data, 2, [EFFECTS["double_cage"]], ctx, est, 0.01)
-    x = np.concatenate([[est[n] for n in model.base_names], [0.3, 0.004]])
+    x = np.concatenate([[est[n] for n in model.base_names], [0.3, 0.004, 0.0, 5e-4]])
     r = model.residuals(x[None])[0]
     assert r.shape == (2 * len(rec.t) + len(data.stop_t),) and np.all(np.isfinite(r))
     assert np.sqrt(np.mean(r[:2 * len(rec.t)] ** 2)) < 50  # a sane scale: currents over their own noise

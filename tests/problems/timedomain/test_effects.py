@@ -24,7 +24,7 @@ from scipy.optimize import least_squares
 from benchmark.core.effects import EffectContext, effect_context, facts_of, load_effects
 from benchmark.problems.timedomain.bench_effects import compress_soft, fractional_delay
 from benchmark.problems.timedomain.data import load_startup_dataset
-from benchmark.problems.timedomain.extended import base_row, base_rows, simulate_extended_batch, valid_rows
+from benchmark.problems.timedomain.extended import N_STATES, base_row, base_rows, simulate_extended_batch, valid_rows
 from benchmark.problems.timedomain.protocol import StartupStopTest
 from benchmark.problems.timedomain.simulation import hold_is_linear
 from tests.conftest import PAPER_MOTOR
@@ -97,7 +97,7 @@ def test_t_mode_of_the_magnetising_branch():
 def test_augmentations_combine_without_overwriting_each_other():
     ctx = _ctx()
     rows = base_rows(PAPER_MOTOR.vector()[None], 1)
-    picks = {"double_cage": np.array([0.8, 0.004]), "main_saturation": np.array([0.2, 6.0, 0.05, 0.5]),
+    picks = {"double_cage": np.array([0.8, 0.004, 0.2, 0.0008]), "main_saturation": np.array([0.2, 6.0, 0.05, 0.5]),
              "iron_loss": np.array([0.02, 0.5]), "leakage_saturation": np.array([1.0, 2.0, 0.3]),
              "temperature_drift": np.array([10.0, 0.5]), "inverter_drop": np.array([0.02]),
              "sensor_offset": np.array([0.01, -0.01, 0.0, 0.0]), "two_mass": np.array([80.0, 1.0, 0.05, 0.002]),
@@ -179,7 +179,7 @@ def test_leakage_curve_falls_from_the_unsaturated_value_to_its_floor():
     # the curve is the kernel's: the stator current of a row at a given leakage flux
     rows = eff.augment(base_row(PAPER_MOTOR)[None], x[None], ctx)
     dpsi = float(L[3] * cur[3])
-    xs = np.zeros(10)
+    xs = np.zeros(N_STATES)
     xs[0] = dpsi
     from benchmark.problems.timedomain.extended import _stator_current
 
@@ -338,7 +338,8 @@ CASES = [
     ("main_saturation", "arctan", "dol", 1, {"size": 0.28}, 0.95),
     ("main_saturation", "table", "six_step", 1, None, 0.9),
     ("double_cage", "double_cage", "dol", 1, None, 0.9),
-    ("double_cage", "deep_bar", "six_step", 1, None, 0.9),
+    # three rotor loops: 28.5 -> 0.021 (99.9 %); with two, 0.380 (98.7 %), the harmonics' rotor impedance
+    ("double_cage", "deep_bar", "six_step", 1, None, 0.995),
     ("iron_loss", "eddy_winding", "dol", 1, None, 0.8),
     ("iron_loss", "shunt", "six_step", 1, None, 0.7),
     ("leakage_saturation", "lorentzian", "dol", 1, None, 0.75),
@@ -439,19 +440,20 @@ def test_rotor_heats_by_its_own_factor():
     ctx = _ctx()
     row = eff.augment(base_rows(PAPER_MOTOR.vector()[None], 1), np.array([[12.0, 0.8]]), ctx)[0]
     theta = 15.0
-    x = np.array([0.3, -0.2, 0.25, -0.1, 0.0, 0.0, 120.0, theta, 0.0, 0.0])
+    x = np.zeros(N_STATES)
+    x[:8] = [0.3, -0.2, 0.25, -0.1, 0.0, 0.0, 120.0, theta]
     alpha = row[IDX["alpha_th"]]
     same = row.copy()
     same[IDX["th_rotor"]] = 0.0
     same[IDX["R_r1"]] *= (1 + alpha * 1.8 * theta) / (1 + alpha * theta)
-    out_c, out_same = np.zeros(10), np.zeros(10)
+    out_c, out_same = np.zeros(N_STATES), np.zeros(N_STATES)
     t_c = _derivative(row, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_c)
     t_same = _derivative(same, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_same)
     np.testing.assert_allclose(out_c, out_same, rtol=1e-12)
     assert t_c == pytest.approx(t_same, rel=1e-12)
     plain = row.copy()
     plain[IDX["th_rotor"]] = 0.0
-    out_plain = np.zeros(10)
+    out_plain = np.zeros(N_STATES)
     _derivative(plain, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_plain)
     assert abs(out_plain[2] - out_c[2]) > 1e-3 * abs(out_c[2])  # the factor moves the rotor's EMF
     cold_rotor = row.copy()
