@@ -23,7 +23,7 @@ class _Effect(SimpleNamespace):
 
 def _fit(chi2, ssr_in, effects=()):
     return SimpleNamespace(chi2=chi2, ssr_in=ssr_in, names=[e.name for e in effects],
-                           model=SimpleNamespace(effects=list(effects)))
+                           model=SimpleNamespace(effects=list(effects)), r_in=None, used=None)
 
 
 class _Given(Selector):
@@ -242,3 +242,35 @@ def test_far_from_the_noise_an_effect_that_removes_nothing_beside_the_others_is_
     assert pruned == ["iron_loss"] and kept.names == ["two_mass", "load_torque", "speed_sensor_gain"]
     assert [w.chi2 for w in withouts] == [10400.0, 8500.0, 3950.0]
     assert _Given(held, DiagnosisSettings(min_far_share=0.0)).prune(final, _chi(19251.0), 1.101)[2] == []
+
+
+def test_a_suspect_the_base_holds_is_fitted_fully_whatever_its_screening(monkeypatch):
+    """A load torque the base's Coulomb friction holds (``held_by_base``) screens last: its cheap
+    fit starts where the friction already carries it (motulator blind seed 64, sets 14 and 17: a
+    load step on through the coast-down, screened last of eleven, never fitted fully, verdict
+    ``unexplained``). As a suspect it is fitted fully whatever the screening scored."""
+    from benchmark.problems.timedomain.diagnosis import selection
+
+    monkeypatch.setattr(selection, "effective_samples", lambda *a: 500.0)
+    monkeypatch.setattr(_Given, "data", None, raising=False)
+    screened = {"load_torque": 1005.0, "speed_sensor_gain": 900.0, "channel_delay": 990.0}
+    full = {frozenset(): (1000.0, 1000e3), frozenset(["load_torque"]): (100.0, 100e3),
+            frozenset(["speed_sensor_gain"]): (800.0, 800e3), frozenset(["channel_delay"]): (980.0, 980e3)}
+
+    class _Screened(_Given):
+        def prescreen(self, chosen, additions, cur, progress=None):
+            keyed = sorted(((screened[a[0].name], a) for a in additions), key=lambda p: p[0])
+            return [a for _, a in keyed], [{"effect": a[0].name, "heldout_chi2_fold_B": c} for c, a in keyed]
+
+    settings = DiagnosisSettings(screen_keep=1, max_effects=1)
+    base = _fit(1000.0, 1000e3)
+    plain = _Screened(full, settings)
+    cur, rounds = plain.forward_selection([LOAD, GAIN, SKEW], base, BAND)
+    assert cur.names == ["speed_sensor_gain"] and rounds[0]["kept"] == ["speed_sensor_gain"]
+    assert ["load_torque"] not in plain.fitted  # screened out: the load is never fitted
+    held = _Screened(full, settings)
+    cur, rounds = held.forward_selection([LOAD, GAIN, SKEW], base, BAND, suspects=(LOAD,))
+    assert rounds[0]["kept"] == ["speed_sensor_gain", "load_torque"]
+    assert cur.names == ["load_torque"] and cur.chi2 == 100.0
+    assert rounds[1]["chosen"] == "load_torque" and abs(rounds[1]["candidates"][0]["excess_reduction"]
+                                                        - 900.0 / 999.0) < 1e-12

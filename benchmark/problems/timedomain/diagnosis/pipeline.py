@@ -380,8 +380,13 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     q_before = quality(base_fit.held_used)
     facts = data.facts(settings.base_case)
     candidates, excluded = screen(effects, facts)
+    # what the base holds under another name (a load torque in its Coulomb friction) is a suspect:
+    # fitted fully in every round of the selection whatever its screening (Selector.forward_selection)
+    held_before = held_by_base(list(base.base_names), base_full, ctx, settings, rated_torque(ds.nameplate),
+                               base.standard_errors(base_full))
+    suspects = tuple(e for e in candidates if e.name in {h["effect"] for h in held_before})
     if q_before.ratio > q_before.threshold:
-        final, rounds = sel.forward_selection(candidates, base_fit, q_before.threshold, progress)
+        final, rounds = sel.forward_selection(candidates, base_fit, q_before.threshold, progress, suspects)
     else:
         final, rounds = base_fit, []
     full_x = None
@@ -393,7 +398,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     if pruned and len(final.names) < settings.max_effects and final.chi2 > q_before.threshold**2:
         # the pruned effect's place is free: resume the selection once, without the pruned ones
         rest = [e for e in candidates if e.name not in pruned]
-        final, more = sel.forward_selection(rest, final, q_before.threshold, progress)
+        final, more = sel.forward_selection(rest, final, q_before.threshold, progress,
+                                            tuple(e for e in suspects if e in rest))
         done = sum(1 for r in rounds if "candidates" in r)
         for r in more:
             r["round"] += done if "candidates" in r else 0

@@ -269,14 +269,20 @@ class Selector:
                 "earns": bool(red >= need and cur.chi2 - sf.chi2 >= st.min_band_drop * (band**2 - 1.0)
                               and crit < 0)}
 
-    def forward_selection(self, candidates, base_fit: SetFit, band: float, progress=None):
+    def forward_selection(self, candidates, base_fit: SetFit, band: float, progress=None, suspects=()):
         """Greedy forward selection on the held-out folds, with the pair look-ahead of the
         module docstring, from ``base_fit`` (the base, or a set already chosen); returns (chosen
         SetFit, rounds).
 
         Every round starts from all remaining candidates: with more than ``screen_keep`` of them, a
         cheap screening from the current set keeps the best ``screen_keep`` (so an effect masked by
-        another one in the first round is looked at again once that one is in the model)."""
+        another one in the first round is looked at again once that one is in the model).
+
+        ``suspects`` (candidates the base model already holds under another name, e.g. a load
+        torque its Coulomb friction took up) are fitted fully in every round whatever the
+        screening scored: their cheap fit starts where the base's friction already carries
+        them and ranks them last (motulator blind sets 64/14 and 64/17: a load step on through
+        the coast-down, screened last of eleven, never fitted, verdict ``unexplained``)."""
         st = self.settings
         cur = base_fit
         chosen: list[Effect] = list(base_fit.model.effects)
@@ -288,6 +294,7 @@ class Selector:
             if len(pool) > st.screen_keep:
                 kept, screened = self.prescreen(chosen, [(e,) for e in pool], cur, progress)
                 pool = [a[0] for a in kept[:st.screen_keep]]
+                pool += [a[0] for a in kept[st.screen_keep:] if a[0] in suspects]
                 rounds.append({"round": 0, "from": [e.name for e in chosen], "screening": screened,
                                "kept": [e.name for e in pool]})
             trials = []
