@@ -382,8 +382,11 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     candidates, excluded = screen(effects, facts)
     # what the base holds under another name (a load torque in its Coulomb friction) is a suspect:
     # fitted fully in every round of the selection whatever its screening (Selector.forward_selection)
-    held_before = held_by_base(list(base.base_names), base_full, ctx, settings, rated_torque(ds.nameplate),
-                               base.standard_errors(base_full))
+    rated = rated_torque(ds.nameplate)
+    held_before = held_by_base(list(base.base_names), base_full, ctx, settings, rated)
+    if held_before:  # the point value is above the share: is it with its standard error (a Jacobian)?
+        held_before = held_by_base(list(base.base_names), base_full, ctx, settings, rated,
+                                   base.standard_errors(base_full))
     suspects = tuple(e for e in candidates if e.name in {h["effect"] for h in held_before})
     if q_before.ratio > q_before.threshold:
         final, rounds = sel.forward_selection(candidates, base_fit, q_before.threshold, progress, suspects)
@@ -465,8 +468,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "facts": {k: v for k, v in facts.items()},
         "conditioning": list(ds.conditioning),
         "removed_by_conditioning": list(ds.conditioning_removed),
-        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated_torque(ds.nameplate),
-                                     base_se),
+        "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated, base_se),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
