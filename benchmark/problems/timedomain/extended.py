@@ -212,6 +212,25 @@ def _t_solve(c, x):
     return (x[0] - pm_a) / Lls, (x[1] - pm_b) / Lls, (pr_a - pm_a) / Llr, (pr_b - pm_b) / Llr, g0
 
 
+@numba.njit(cache=True, inline="always")
+def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
+    """Current (A) of a rotor loop of resistance ``R`` (ohm; 0: absent, no current) and leakage
+    ``L`` (H) whose flux linkage (Wb) is ``p`` over the magnetising node's ``pm``; ``gain``
+    refers it (1 in inverse-Gamma units, the T circuit's g0 in T units)."""
+    if R > 0.0:
+        return gain * (p_a - pm_a) / L, gain * (p_b - pm_b) / L
+    return 0.0, 0.0
+
+
+@numba.njit(cache=True, inline="always")
+def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
+    """d psi / dt (V) of a rotor loop (resistance ``R`` ohm, 0: absent; ``R_t`` at its
+    temperature) carrying ``i`` (A) at the electrical rotor speed ``w`` (rad/s)."""
+    if R > 0.0:
+        return -R_t * i_a - w * p_b, -R_t * i_b + w * p_a
+    return 0.0, 0.0
+
+
 @numba.njit(cache=True)
 def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
@@ -232,27 +251,14 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_
     is_a = d_a * g
     is_b = d_b * g
-    if R_r2 > 0.0:
-        i2_a = (p2_a - pm_a) / Ls2
-        i2_b = (p2_b - pm_b) / Ls2
-    else:
-        i2_a = 0.0
-        i2_b = 0.0
     p3_a, p3_b = x[10], x[11]
-    if R_r3 > 0.0:
-        i3_a = (p3_a - pm_a) / Ls3
-        i3_b = (p3_b - pm_b) / Ls3
-    else:
-        i3_a = 0.0
-        i3_b = 0.0
+    i2_a, i2_b = _loop_current(R_r2, 1.0, p2_a, p2_b, pm_a, pm_b, Ls2)
+    i3_a, i3_b = _loop_current(R_r3, 1.0, p3_a, p3_b, pm_a, pm_b, Ls3)
     if _t_mode(c):
         is_a, is_b, ir_a, ir_b, g0 = _t_solve(c, x)
-        if R_r2 > 0.0:  # cage 2 on the rotor node, in T units
-            i2_a = g0 * (p2_a - pm_a) / Ls2
-            i2_b = g0 * (p2_b - pm_b) / Ls2
-        if R_r3 > 0.0:
-            i3_a = g0 * (p3_a - pm_a) / Ls3
-            i3_b = g0 * (p3_b - pm_b) / Ls3
+        # cage 2 and loop 3 on the rotor node, in T units
+        i2_a, i2_b = _loop_current(R_r2, g0, p2_a, p2_b, pm_a, pm_b, Ls2)
+        i3_a, i3_b = _loop_current(R_r3, g0, p3_a, p3_b, pm_a, pm_b, Ls3)
         e_a = -(R_r1_t / g0) * (ir_a - i2_a - i3_a) - w * pm_b
         e_b = -(R_r1_t / g0) * (ir_b - i2_b - i3_b) + w * pm_a
         if R_r2 > 0.0:  # back to inverse-Gamma units for the cage equations below
@@ -291,18 +297,8 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
         out[1] = v_b - Rs_t * is_b
     out[2] = e_a
     out[3] = e_b
-    if R_r2 > 0.0:
-        out[4] = -R_r2_t * i2_a - w * p2_b
-        out[5] = -R_r2_t * i2_b + w * p2_a
-    else:
-        out[4] = 0.0
-        out[5] = 0.0
-    if R_r3 > 0.0:
-        out[10] = -R_r3_t * i3_a - w * p3_b
-        out[11] = -R_r3_t * i3_b + w * p3_a
-    else:
-        out[10] = 0.0
-        out[11] = 0.0
+    out[4], out[5] = _loop_flux_rate(R_r2, R_r2_t, i2_a, i2_b, w, p2_a, p2_b)
+    out[10], out[11] = _loop_flux_rate(R_r3, R_r3_t, i3_a, i3_b, w, p3_a, p3_b)
     t_m = 1.5 * p * (ps_a * is_b - ps_b * is_a)
     J_l = c[31]
     if J_l > 0.0:
