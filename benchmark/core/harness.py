@@ -39,6 +39,7 @@ from benchmark.core.progress import ProgressBar, progress_wanted
 from benchmark.core.quality import assess
 from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
 from benchmark.core.tables import table_size_limit
+from benchmark.core.threads import one_blas_thread
 
 #: The checkpoint of a run in progress (see :class:`benchmark.core.problem.EvaluationJournal`);
 #: removed once ``result.json`` is written.
@@ -194,6 +195,7 @@ def build_problem(cfg: DictConfig) -> Problem:
     return instantiate(cfg.problem.setup)(settings, dataset, truth_doc)
 
 
+@one_blas_thread
 def run_diagnosis(cfg: DictConfig, outdir: Path, progress=None) -> dict:
     """Diagnose the configured data set into ``outdir`` through the problem's ``diagnose`` hook
     (the truth of synthetic data is discarded here); returns the diagnosis document."""
@@ -265,6 +267,7 @@ def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[st
     return out
 
 
+@one_blas_thread
 def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     """One identification run, written to ``outdir``.
 
