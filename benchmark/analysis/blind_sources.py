@@ -19,6 +19,7 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+import yaml
 from omegaconf import open_dict
 
 from benchmark.analysis.blind import (
@@ -32,15 +33,51 @@ from benchmark.analysis.blind import (
 )
 from benchmark.core.effects import load_effects
 
+#: Share of the sets without an injected channel skew whose meta.yaml still states one (a
+#: multiplexed card whose acquisition software aligned the channels): ``channel_delay`` is a
+#: candidate there and must not be named.
+STATED_SKEW_WITHOUT = 0.3
+
+
+def stated_skew(settings: BlindSettings, d: dict, injected: float | None) -> float | None:
+    """The channel skew (samples) draw ``d``'s ``meta.yaml`` states: the injected one (a card's
+    documented sequence), else with probability :data:`STATED_SKEW_WITHOUT` one of the same
+    range the record does not carry, else none. Drawn from the set's own stream (so that the
+    other draws do not change)."""
+    if injected is not None:
+        return float(injected)
+    rng = np.random.default_rng([int(settings.seed), int(d["index"]), 7])
+    if rng.random() >= STATED_SKEW_WITHOUT:
+        return None
+    return float(rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 2.0))
+
+
+def state_skew(folder: Path, skew: float | None) -> None:
+    """Write ``channel_skew`` (samples) into ``folder/meta.yaml`` (nothing when ``skew`` is None)."""
+    if skew is None:
+        return
+    meta = Path(folder) / "meta.yaml"
+    doc = yaml.safe_load(meta.read_text()) or {}
+    doc["channel_skew"] = float(skew)
+    meta.write_text(yaml.safe_dump(doc, sort_keys=False))
+
 
 def own_source(settings: BlindSettings):
     """(draws, make(d, folder)) of the project's own synthetic plant."""
     from synthetic.timedomain import generate
 
     draws = draw_sets(settings, exclude=settings.in_base)
+    lag = load_effects("timedomain")["channel_delay"].form.get("lag", "current")
+    for d in draws:
+        injected = None
+        if "channel_delay" in d["effects"]:
+            sign = -1.0 if d["form"].get("channel_delay", {}).get("lag", lag) == "voltage" else 1.0
+            injected = sign * d["size"]["channel_delay"]
+        d["channel_skew"] = stated_skew(settings, d, injected)
 
     def make(d, folder):
         generate(generator_config(settings, d), folder)
+        state_skew(folder, d.get("channel_skew"))
 
     return draws, make
 
@@ -68,10 +105,15 @@ def plant_source(settings: BlindSettings):
             spec["scenario"]["duration"] = settings.plant_duration
         if not settings.plant_stop:
             spec["stop"] = None
-        draws.append({"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]})
+        d = {"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]}
+        skew = next((e for e in spec["effects"] if e["name"] == "channel_delay"), None)
+        injected = None if skew is None else (-1.0 if skew["form"] == "voltage_lag" else 1.0) * float(skew["size"])
+        d["channel_skew"] = stated_skew(settings, d, injected)
+        draws.append(d)
 
     def make(d, folder):
         write_dataset(make_dataset(d["spec"]), folder)
+        state_skew(folder, d.get("channel_skew"))
 
     return draws, make
 

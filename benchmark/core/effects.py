@@ -19,7 +19,7 @@ naming it with ``_target_``; :func:`load_effects` builds them all.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -43,8 +43,14 @@ class EffectContext:
     ``J w_end / t_90``, a scale for load torques, about 1-2 times a motor's rated torque);
     load_change (s from the record's start, or None): where the current's envelope changes most
     abruptly after the start-up has reached speed (a load step's likely instant, a starting
-    value for effects that step; see :func:`load_change_time`); T_rated (N m, a rated torque
-    estimated from the base model, or 0 when the context does not have one).
+    value for effects that step; see :func:`load_change_time`); load_release (s from the
+    record's start, or None): where the envelope falls most abruptly after that (a switched load's
+    likely end); T_rated (N m, a rated torque estimated from the base model, or 0 when the
+    context does not have one); I_rated (A rms, a rated current: the nameplate's or a lower
+    bound from the rated power; 0 when unknown); I2t (A^2 s, the integral of the squared rms
+    phase current over the start-up record: ``|i_alpha + j i_beta|^2 / 2`` in amplitude-invariant
+    components); facts (what ``meta.yaml`` and the record say about the experiment, as
+    :meth:`Effect.applies_to` reads them, e.g. ``channel_skew``).
     """
 
     w_e: float
@@ -62,6 +68,10 @@ class EffectContext:
     T_acc: float = 0.0
     load_change: float | None = None
     T_rated: float = 0.0
+    load_release: float | None = None
+    I_rated: float = 0.0
+    I2t: float = 0.0
+    facts: dict = field(default_factory=dict)
 
     @property
     def flux(self) -> float:
@@ -303,13 +313,17 @@ def effect_context(t: np.ndarray, v_a: np.ndarray, v_b: np.ndarray, i_a: np.ndar
     E_kin = 0.5 * J * w_end**2
     fast = np.flatnonzero(speed >= 0.9 * w_end)
     t90 = float(t[fast[0]] - t[0]) if len(fast) and fast[0] > 0 else float(t[-1] - t[0])
+    i_mag = np.hypot(i_a, i_b)
+    change = load_change_time(t, i_mag, w_e, t90)
+    release = None if change is None else load_change_time(t, i_mag, w_e, change, fall=True)
     return EffectContext(
-        w_e=w_e, V1=V1, I_peak=float(np.max(np.hypot(i_a, i_b))), w_sync=w_e / pole_pairs,
+        w_e=w_e, V1=V1, I_peak=float(np.max(i_mag)), w_sync=w_e / pole_pairs,
         dc_link_voltage=float(dc_link_voltage) if dc_link_voltage else float(np.pi * V1 / 2.0),
         E_cu=max(E_in - E_kin, 1e-9), L_M=float(L_M), L_sigma=float(L_sigma),
         sample_time=dt, duration=float(t[-1] - t[0]), pole_pairs=int(pole_pairs), J=float(J),
         T_acc=float(J * 0.9 * max(w_end, 1e-9) / max(t90, dt)),
-        load_change=load_change_time(t, np.hypot(i_a, i_b), w_e, t90),
+        load_change=change, load_release=release,
+        I2t=float(np.sum(0.5 * i_mag**2) * dt),
     )
 
 
@@ -318,9 +332,10 @@ def effect_context(t: np.ndarray, v_a: np.ndarray, v_b: np.ndarray, i_a: np.ndar
 LOAD_CHANGE_MIN = 0.05
 
 
-def load_change_time(t: np.ndarray, i_mag: np.ndarray, w_e: float, t90: float) -> float | None:
+def load_change_time(t: np.ndarray, i_mag: np.ndarray, w_e: float, t90: float, fall: bool = False) -> float | None:
     """Where the current envelope rises most abruptly after the start-up (s from ``t[0]``),
-    or None when it rises by less than :data:`LOAD_CHANGE_MIN` of its level.
+    or None when it rises by less than :data:`LOAD_CHANGE_MIN` of its level (with ``fall``:
+    where it falls most abruptly after ``t90``, a switched load's end).
 
     ``i_mag``: the current space vector's magnitude (A); ``w_e``: supply angular frequency
     (rad/s); ``t90``: time to 90 % of the final speed (s). The envelope is the magnitude's mean
@@ -344,7 +359,7 @@ def load_change_time(t: np.ndarray, i_mag: np.ndarray, w_e: float, t90: float) -
     k = np.arange(start, n - per)
     after = (c[k + per] - c[k]) / per
     before = (c[k] - c[k - per]) / per
-    jump = after - before
+    jump = before - after if fall else after - before
     j = int(np.argmax(jump))
     level = float(np.mean(i_mag[start:]))
     if level <= 0 or jump[j] < LOAD_CHANGE_MIN * level:

@@ -42,16 +42,22 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     rated torque on a direct-on-line start; in the diagnosis at least the rated torque
     estimated from the base model), 0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
     (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
-    (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record). One
-    augmentation fits all three: extras ``load_const``, ``load_quad``, ``load_step`` (over
-    the torque scale, each within 0-1.5) and ``load_step_time`` (fraction of the record), the step smoothed over one
-    sample (a tanh of time constant ``Ts``): abrupt enough to excite a coupling resonance as a
-    real step does, smooth enough for its instant to be fitted between samples.
+    (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record),
+    ``dc_machine`` (a DC generator switched onto a resistor at ``step_fraction``: its torque
+    ``T w/w_sync`` rises with its armature's time constant ``tau``, s, and may be switched off
+    at ``off_fraction``). One augmentation fits all four: extras ``load_const``, ``load_quad``,
+    ``load_step`` (over the torque scale, each within 0-1.5), ``load_step_time`` (fraction of the
+    record), ``load_step_speed`` (share of the switched load proportional to speed),
+    ``load_step_tau`` (its first-order rise, s, from one sample: abrupt enough to excite a
+    coupling resonance as a real step does, smooth enough for its instant to be fitted between
+    samples) and ``load_step_off`` (its switch-off, fraction of the record; never when at or
+    before the switch-on).
 ``channel_delay``
     A time skew between the voltage and current channels. Size: 0.1-2 samples; form ``lag``:
     ``current`` (the current channels lag) or ``voltage``. Augmentation: the simulated currents
     delayed by ``skew`` samples (signed: positive = currents lag) by cubic (4-point Lagrange)
-    interpolation; extra ``skew`` (samples).
+    interpolation; extra ``skew`` (samples), searched about the skew ``meta.yaml`` states
+    (``channel_skew``); a candidate only where it states one (:class:`ChannelDelay`).
 """
 
 from __future__ import annotations
@@ -343,13 +349,16 @@ class LoadTorque(Effect):
     name = "load_torque"
     size_name = "torque_over_T_acc"
     realistic = (0.05, 0.6)
-    extra_names = ("load_const", "load_quad", "load_step", "load_step_time")
-    physics = "a load torque: constant, ~speed^2, or stepping at an unknown instant"
+    extra_names = ("load_const", "load_quad", "load_step", "load_step_time", "load_step_speed", "load_step_tau",
+                   "load_step_off")
+    physics = ("a load torque: constant, ~speed^2, or switched on (and off) at unknown instants through a "
+               "first-order rise, in part proportional to speed (a DC machine's armature circuit)")
     shows_in = "steady slip and current rise over a window; a speed dip"
-    FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]}]
-
-    def _rise(self, ctx):
-        return ctx.sample_time
+    FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]},
+                  {"kind": "dc_machine", "step_fraction": [0.3, 0.6], "tau": [0.01, 0.06]}]
+    #: Longest rise of a switched load, s: a DC machine's armature circuit (L_a/R, 5-100 ms with
+    #: its load resistor), a contactor-switched brake.
+    MAX_RISE = 0.2
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
@@ -361,24 +370,40 @@ class LoadTorque(Effect):
         elif kind == "quadratic":
             row[IDX["T_q"]] = T
             row[IDX["w_ref"]] = ctx.w_sync
-        elif kind == "step":
+        elif kind in ("step", "dc_machine"):
             row[IDX["T_s"]] = T
             row[IDX["t_step"]] = float(form.get("step_fraction", 0.5)) * ctx.record_duration
             row[IDX["t_rise"]] = 0.0
+            if kind == "dc_machine":  # a DC generator on a resistor: T = T_s (w/w_sync), its armature's rise
+                row[IDX["w_ref"]] = ctx.w_sync
+                row[IDX["T_s_speed"]] = 1.0
+                row[IDX["tau_s"]] = float(form.get("tau", 0.03))
+                off = form.get("off_fraction")
+                row[IDX["t_step_off"]] = 0.0 if off is None else float(off) * ctx.record_duration
         else:
-            raise ValueError(f"load_torque: kind must be constant, quadratic or step, got {kind!r}")
+            raise ValueError(f"load_torque: kind must be constant, quadratic, step or dc_machine, got {kind!r}")
         return row
 
     def extra_bounds(self, ctx):
-        return np.array([0.0, 0.0, 0.0, 0.02]), np.array([1.5, 1.5, 1.5, 0.98])
+        """Torques over the torque scale (0-1.5: a motor cannot drive much more than its rated
+        torque), the switch-on instant (fraction of the record), the share of the switched load
+        that follows speed (0-1), its rise time constant (one sample to :data:`MAX_RISE`, s) and
+        the switch-off instant (fraction of the record; at or before the switch-on: never)."""
+        ts = max(ctx.sample_time, 1e-6)
+        return (np.array([0.0, 0.0, 0.0, 0.02, 0.0, ts, 0.02]),
+                np.array([1.5, 1.5, 1.5, 0.98, 1.0, max(self.MAX_RISE, 2 * ts), 1.0]))
 
     def extra_starts(self, ctx):
-        starts = [np.array([0.1, 0.1, 0.0, 0.5]), np.array([0.0, 0.0, 0.2, 0.35]), np.array([0.0, 0.0, 0.2, 0.65]),
-                  np.array([0.0, 0.0, 0.2, 0.85])]
+        ts = max(ctx.sample_time, 1e-6)
+        starts = [np.array([0.1, 0.1, 0.0, 0.5, 0.0, ts, 1.0])]
+        starts += [np.array([0.0, 0.0, 0.2, t, 0.0, ts, 1.0]) for t in (0.35, 0.65, 0.85)]
         change = ctx.load_change
         if change is not None:  # a step where the current envelope jumps: the first start (the screening's)
             lo, hi = self.extra_bounds(ctx)
-            starts.insert(0, np.array([0.0, 0.0, 0.2, float(np.clip(change / ctx.record_duration, lo[3], hi[3]))]))
+            on = float(np.clip(change / ctx.record_duration, lo[3], hi[3]))
+            starts.insert(0, np.array([0.0, 0.0, 0.2, on, 0.0, ts, 1.0]))
+            off = 1.0 if ctx.load_release is None else float(np.clip(ctx.load_release / ctx.record_duration, on, 1.0))
+            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, off]))  # a DC machine loaded there
         return starts
 
     def starts_from_base(self, base, ctx):
@@ -400,7 +425,7 @@ class LoadTorque(Effect):
         return [({"fc": own}, step)]
 
     def start_grid(self, ctx):
-        """The step's instant (fraction of the record) every half supply period: from afar the
+        """The switch-on instant (fraction of the record) every half supply period: from afar the
         local fits do not reach a one-sample edge (a step of 95 % of the rated torque at 0.73 s
         of a 1.37 s direct-on-line record, started from the current envelope's 0.36 s, stayed
         ``unexplained``), and the envelope's largest rise lags the step by up to a few periods."""
@@ -417,13 +442,19 @@ class LoadTorque(Effect):
         rows[:, IDX["w_ref"]] = ctx.w_sync
         rows[:, IDX["T_s"]] = extras[:, 2] * T
         rows[:, IDX["t_step"]] = extras[:, 3] * ctx.record_duration
-        rows[:, IDX["t_rise"]] = self._rise(ctx)
+        rows[:, IDX["t_rise"]] = ctx.sample_time
+        rows[:, IDX["T_s_speed"]] = extras[:, 4]
+        rows[:, IDX["tau_s"]] = extras[:, 5]
+        rows[:, IDX["t_step_off"]] = extras[:, 6] * ctx.record_duration
         return rows
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
+        off = float(x[6] * ctx.record_duration) if x[6] > x[3] and x[6] < 1.0 else None
         return {"constant_Nm": float(x[0] * ctx.torque_scale), "quadratic_at_sync_Nm": float(x[1] * ctx.torque_scale),
-                "step_Nm": float(x[2] * ctx.torque_scale), "step_time_s": float(x[3] * ctx.record_duration)}
+                "switched_Nm": float(x[2] * ctx.torque_scale), "switched_on_s": float(x[3] * ctx.record_duration),
+                "switched_share_following_speed": float(x[4]), "switched_rise_s": float(x[5]),
+                "switched_off_s": off}
 
 
 # ----------------------------------------------------------------------------- channel skew
@@ -453,15 +484,46 @@ def fractional_delay(x: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 
 class ChannelDelay(Effect):
+    """A time skew between the voltage and current channels of the acquisition. A card samples
+    its channels at once (no skew) or in a documented sequence (a known fraction of a sample,
+    ``k/N`` for the ``k``-th of ``N`` multiplexed channels): the skew is a fact of the
+    acquisition, stated in ``meta.yaml`` (``channel_skew``, samples, positive when the currents
+    are sampled after the voltages; a number, or ``[low, high]``), and the fit searches it
+    within :data:`SKEW_TOLERANCE` of the stated value (within the stated range). A record that
+    states none (or 0) cannot carry one: ``channel_delay`` is then not a candidate."""
+
     name = "channel_delay"
     size_name = "skew"
     size_unit = "samples"
     realistic = (0.1, 2.0)
     extra_names = ("skew",)
-    physics = "a time skew between the voltage and current channels"
+    physics = "a time skew between the voltage and current channels (a multiplexed card's documented sequence)"
     shows_in = "a quadrature residual at the supply frequency"
     measure_stage = 0
     FORM_DRAWS = {"lag": {"choice": ["current", "voltage"]}}
+    #: Relative tolerance of a stated skew: a multiplexed card's sequence is documented, its
+    #: conversion clock and sample-and-hold aperture are known to some tens of per cent.
+    SKEW_TOLERANCE = 0.25
+
+    @staticmethod
+    def stated(facts: dict) -> tuple[float, float] | None:
+        """The stated skew range (samples) of ``facts`` (``channel_skew``), or None."""
+        v = (facts or {}).get("channel_skew")
+        if v is None:
+            return None
+        lo, hi = (float(v[0]), float(v[1])) if np.ndim(v) else (float(v), float(v))
+        if lo == hi == 0.0:
+            return None
+        if lo == hi:
+            d = ChannelDelay.SKEW_TOLERANCE * abs(lo)
+            return lo - d, hi + d
+        return min(lo, hi), max(lo, hi)
+
+    def applies_to(self, facts):
+        if self.stated(facts) is None:
+            return ("meta.yaml states no channel skew (channel_skew): a card that samples its channels at once "
+                    "has none, a multiplexed one a documented fraction of a sample")
+        return None
 
     def plant(self, row, size, ctx, form=None):
         return row.copy()
@@ -472,10 +534,12 @@ class ChannelDelay(Effect):
         return np.array([sign * float(size)])
 
     def extra_bounds(self, ctx):
-        return np.array([-3.0]), np.array([3.0])
+        lo, hi = self.stated(ctx.facts) or (-self.realistic[1], self.realistic[1])
+        return np.array([lo]), np.array([hi])
 
     def extra_starts(self, ctx):
-        return [np.array([0.5]), np.array([-0.5])]
+        lo, hi = self.extra_bounds(ctx)
+        return [0.5 * (lo + hi)]
 
     def measure(self, sim, extras, ctx):
         extras = np.atleast_2d(extras)

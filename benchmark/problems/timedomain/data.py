@@ -46,7 +46,7 @@ SYNC_SPEED_MARGIN = 1.5
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
              "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
-             "conditioning", "chord_voltage")
+             "conditioning", "chord_voltage", "channel_skew")
 #: Keys of ``nameplate`` in meta.yaml: rated power (W), voltage (V line-line rms), current (A rms),
 #: speed (rpm), frequency (Hz).
 NAMEPLATE_KEYS = ("rated_power", "voltage", "current", "speed", "frequency")
@@ -118,6 +118,10 @@ class StartupDataset:
     winding_temperature : deg C of the winding when the DC resistance was measured, or None.
     nameplate : {rated_power (W), voltage (V line-line rms), current (A rms), speed (rpm),
         frequency (Hz)}, any subset, or None.
+    channel_skew : the acquisition's documented skew of the current channels behind the voltage
+        channels, samples (a multiplexed card's sequence; a number, or a (low, high) range), or
+        None (channels sampled at once, or not stated): ``channel_delay`` is a candidate only
+        where it is stated.
     conditioning : what the conditioning on load did (plain-English lines for report.md).
     conditioning_removed : the effects it found and removed (``sensor_offset``,
         ``current_sensor_saturation``): the diagnosis lists them, the blind scores count them.
@@ -136,6 +140,7 @@ class StartupDataset:
     stator_dc_resistance: float | None = None
     winding_temperature: float | None = None
     nameplate: dict | None = None
+    channel_skew: float | tuple[float, float] | None = None
     conditioning: list[str] = field(default_factory=list)
     conditioning_removed: list[str] = field(default_factory=list)
 
@@ -146,10 +151,11 @@ class StartupDataset:
 
     def facts(self) -> dict:
         """What the experiment is, for screening candidate effects: ``dc_link_voltage``,
-        ``input_hold``, ``supply_frequency``, ``has_speed``, ``has_stop``."""
+        ``input_hold``, ``supply_frequency``, ``has_speed``, ``has_stop``, ``channel_skew``,
+        ``nameplate``."""
         return {"dc_link_voltage": self.dc_link_voltage, "input_hold": self.input_hold,
                 "supply_frequency": self.supply_frequency, "has_speed": self.has_speed,
-                "has_stop": bool(self.stops)}
+                "has_stop": bool(self.stops), "channel_skew": self.channel_skew, "nameplate": self.nameplate}
 
     def meta(self) -> dict:
         m = {
@@ -166,6 +172,9 @@ class StartupDataset:
                 m[key] = float(getattr(self, key))
         if self.nameplate:
             m["nameplate"] = {k: float(v) for k, v in self.nameplate.items()}
+        if self.channel_skew is not None:
+            m["channel_skew"] = ([float(v) for v in self.channel_skew] if np.ndim(self.channel_skew)
+                                 else float(self.channel_skew))
         return m
 
 
@@ -209,6 +218,8 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         optional["winding_temperature"] = float(theta)
     if meta.get("nameplate") is not None:
         optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])
+    if meta.get("channel_skew") is not None:
+        optional["channel_skew"] = _channel_skew(meta_path, meta["channel_skew"])
     chord = meta.get("chord_voltage", False)
     if not isinstance(chord, bool):
         raise DataError(meta_path, f"key 'chord_voltage' must be true or false, got {_short_repr(chord)}")
@@ -238,6 +249,26 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
 
         ds = condition_dataset(ds)
     return ds
+
+
+#: Largest channel skew meta.yaml may state, samples (a multiplexed card's whole sequence).
+MAX_CHANNEL_SKEW = 8.0
+
+
+def _channel_skew(meta_path: Path, value) -> float | tuple[float, float]:
+    """``channel_skew`` of meta.yaml: samples, a number or ``[low, high]``, within
+    :data:`MAX_CHANNEL_SKEW`."""
+    if isinstance(value, (list, tuple)):
+        if len(value) != 2:
+            raise DataError(meta_path, f"key 'channel_skew' must be a number or [low, high] (samples), got "
+                                       f"{_short_repr(value)}")
+        out = tuple(check_meta_type(meta_path, "channel_skew", v, float) for v in value)
+    else:
+        out = (check_meta_type(meta_path, "channel_skew", value, float),)
+    if not all(abs(v) <= MAX_CHANNEL_SKEW for v in out):
+        raise DataError(meta_path, f"key 'channel_skew' must be within +-{MAX_CHANNEL_SKEW:g} samples, got "
+                                   f"{_short_repr(value)}")
+    return (min(out), max(out)) if len(out) == 2 else out[0]
 
 
 def _nameplate(meta_path: Path, value) -> dict:

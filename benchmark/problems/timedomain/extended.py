@@ -54,8 +54,10 @@ Bench effects (appended fields, all neutral at zero):
 * load torques (N m, summed): ``T_L`` constant and passive (it opposes motion like Coulomb
   friction and holds a shaft at rest), ``T_q (w/w_ref)|w/w_ref|`` (fan, pump; ``w_ref``
   mechanical rad/s), ``T_s`` passive and switched on at ``t_step`` (s) over a smooth
-  ``0.5 (1 + tanh((t - t_step)/t_rise))`` (``t_rise = 0``: a hard step); they act on the load
-  side of a two-mass shaft, else on the single mass;
+  ``0.5 (1 + tanh((t - t_step)/t_rise))`` (``t_rise = 0``: a hard step), or with ``tau_s > 0``
+  over a first-order rise (and fall at ``t_step_off``) of that time constant, a share ``T_s_speed``
+  of it proportional to speed, ``w/w_ref`` (a DC machine loaded on a resistor: its torque follows
+  its armature circuit); they act on the load side of a two-mass shaft, else on the single mass;
 * two-mass shaft (``J_l > 0``): the motor's own inertia is ``J``, the load's ``J_l``, coupled by
   ``T_sh = k_sh twist + c_sh (w_m - w_l)``; with free play of half-width ``backlash`` the spring
   and damper act only in contact, ``T_sh = k_sh (twist -+ backlash) + c_sh (w_m - w_l)`` beyond
@@ -129,12 +131,28 @@ def _loads(c, t, w_mech):
         t_dyn = c[26] * q * abs(q)
     T_s = c[28]
     if T_s != 0.0:
-        tr = c[30]
-        if tr > 0.0:
-            t_pass += T_s * 0.5 * (1.0 + math.tanh((t - c[29]) / tr))
-        elif t >= c[29]:
-            t_pass += T_s
+        env = _switched(t, c[29], c[30], c[42], c[43])
+        share = c[41]
+        t_pass += T_s * env * (1.0 - share)
+        t_dyn += T_s * env * share * w_mech / c[27]
     return t_pass, t_dyn
+
+
+@numba.njit(cache=True, inline="always")
+def _switched(t, t_on, t_rise, tau, t_off):
+    """Envelope (0-1) of the switched load at time t: on at ``t_on`` over a first-order rise of
+    time constant ``tau`` (an armature circuit), off again at ``t_off`` (when after ``t_on``)
+    with the same time constant; with ``tau = 0`` the smooth step ``0.5 (1 + tanh((t -
+    t_on)/t_rise))`` (``t_rise = 0``: a hard step), never off."""
+    if tau <= 0.0:
+        if t_rise > 0.0:
+            return 0.5 * (1.0 + math.tanh((t - t_on) / t_rise))
+        return 1.0 if t >= t_on else 0.0
+    if t < t_on:
+        return 0.0
+    if t_off > t_on and t >= t_off:
+        return (1.0 - math.exp(-(t_off - t_on) / tau)) * math.exp(-(t - t_off) / tau)
+    return 1.0 - math.exp(-(t - t_on) / tau)
 
 
 @numba.njit(cache=True, inline="always")

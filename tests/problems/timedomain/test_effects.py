@@ -67,7 +67,8 @@ def test_neutral_augmentations_leave_the_base_model_unchanged():
     base = base_row(PAPER_MOTOR)[None]
     ref = simulate_extended_batch(base, va, vb, False, 1 / 12000, 1)
     neutral = [("sensor_offset", np.zeros(4)), ("speed_sensor_gain", np.zeros(4)), ("channel_delay", np.zeros(1)),
-               ("load_torque", np.array([0.0, 0.0, 0.0, 0.5])), ("iron_loss", np.array([0.0, 0.5])),
+               ("load_torque", np.array([0.0, 0.0, 0.0, 0.5, 0.0, 1 / 12000, 1.0])),
+               ("iron_loss", np.array([0.0, 0.5])),
                ("main_saturation", np.array([0.0, 6.0, 0.0, 0.5])), ("leakage_saturation", np.array([0.0, 2.0, 0.0]))]
     for name, x in neutral:
         eff = EFFECTS[name]
@@ -101,7 +102,7 @@ def test_augmentations_combine_without_overwriting_each_other():
              "iron_loss": np.array([0.02, 0.5]), "leakage_saturation": np.array([1.0, 2.0, 0.3]),
              "temperature_drift": np.array([10.0, 0.5]), "inverter_drop": np.array([0.02]),
              "sensor_offset": np.array([0.01, -0.01, 0.0, 0.0]), "two_mass": np.array([80.0, 1.0, 0.05, 0.002]),
-             "load_torque": np.array([0.1, 0.1, 0.2, 0.5])}
+             "load_torque": np.array([0.1, 0.1, 0.2, 0.5, 0.5, 0.02, 0.8])}
     alone = {n: EFFECTS[n].augment(rows, x[None], ctx) for n, x in picks.items()}
     both = rows
     for n, x in picks.items():
@@ -119,7 +120,15 @@ def test_applies_to_screens_by_the_experiments_facts():
     assert EFFECTS["inverter_drop"].applies_to({**dol, "input_hold": "zoh"}) is None
     assert EFFECTS["inverter_drop"].applies_to({**dol, "dc_link_voltage": 300.0}) is None
     assert EFFECTS["speed_sensor_gain"].applies_to({**dol, "has_speed": False})
-    assert all(EFFECTS[n].applies_to(dol) is None for n in NEW)
+    assert all(EFFECTS[n].applies_to(dol) is None for n in NEW if n != "channel_delay")
+    # a channel skew is a fact of the acquisition: a candidate only where meta.yaml states one
+    skew = EFFECTS["channel_delay"]
+    assert "channel_skew" in skew.applies_to(dol) and skew.applies_to({**dol, "channel_skew": 0.0})
+    assert skew.applies_to({**dol, "channel_skew": 0.5}) is None
+    lo, hi = skew.extra_bounds(_ctx(facts={"channel_skew": 0.5}))
+    assert (lo[0], hi[0]) == (0.375, 0.625) and skew.extra_starts(_ctx(facts={"channel_skew": 0.5}))[0][0] == 0.5
+    lo, hi = skew.extra_bounds(_ctx(facts={"channel_skew": [-1.0, -0.25]}))
+    assert (lo[0], hi[0]) == (-1.0, -0.25)
 
 
 def test_random_forms_are_the_effects_own_and_reproducible():
@@ -128,7 +137,7 @@ def test_random_forms_are_the_effects_own_and_reproducible():
         assert a == eff.random_form(np.random.default_rng(5)), name
         assert set(a) <= set(eff.form), (name, a)
     kinds = {EFFECTS["load_torque"].random_form(np.random.default_rng(s))["kind"] for s in range(30)}
-    assert kinds == {"constant", "quadratic", "step"}
+    assert kinds == {"constant", "quadratic", "step", "dc_machine"}
     adm = load_effects("admittance")
     kinds = {adm["double_cage"].random_form(np.random.default_rng(s))["kind"] for s in range(30)}
     assert kinds == {"double_cage", "deep_bar", "quadratic"}

@@ -320,10 +320,11 @@ class JointModel:
         theta = self.full_parameters(X)
         J, fv = theta[:, 4:5], theta[:, 5:6]
         col = {k: rows[:, [IDX[k]]] if k in IDX else np.zeros((len(X), 1))
-               for k in ("fc", "T_L", "T_q", "w_ref", "T_s", "t_step")}
+               for k in ("fc", "T_L", "T_q", "w_ref", "T_s", "t_step", "T_s_speed", "tau_s", "t_step_off")}
         fc = np.where(np.isfinite(col["fc"]), col["fc"], theta[:, 6:7])  # an effect may set fc
-        step_on = (col["t_step"] < d.t[-1]).astype(float)
-        A = fc + col["T_L"] + col["T_s"] * step_on
+        step_on = switched_at_end(col, float(d.t[-1]))
+        A = fc + col["T_L"] + col["T_s"] * step_on * (1.0 - col["T_s_speed"])
+        fv = fv + col["T_s"] * step_on * col["T_s_speed"] / col["w_ref"]  # a switched load that follows speed
         with np.errstate(all="ignore"):
             C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
         t = d.stop_t[None, :]
@@ -399,6 +400,19 @@ class JointModel:
         # a parameter the residuals do not depend on here (the magnetising node's place while
         # the leakage saturates too) is not determined: nan, not the pseudo-inverse's 0
         return np.where(np.any(J != 0.0, axis=0), standard_errors(cov), np.nan)
+
+
+def switched_at_end(col: dict, t_end: float) -> np.ndarray:
+    """(n, 1) envelope of the switched load (``T_s``) at the start-up record's end ``t_end`` (s):
+    on (1) when a step came on before it; with a first-order rise (``tau_s > 0``) its value there,
+    and after a switch-off (``t_step_off``) the decay since (the stop record starts from it)."""
+    t_on, tau, t_off = col["t_step"], col["tau_s"], col["t_step_off"]
+    with np.errstate(all="ignore"):
+        safe = np.where(tau > 0, tau, 1.0)
+        off = (t_off > t_on) & (t_off <= t_end)
+        rise = 1.0 - np.exp(-(np.where(off, t_off, t_end) - t_on) / safe)
+        env = np.where(off, rise * np.exp(-(t_end - t_off) / safe), rise)
+    return np.where(tau > 0, np.where(t_on < t_end, env, 0.0), (t_on < t_end).astype(float))
 
 
 def stop_mechanics(data: DiagnosisData, case: int):
