@@ -16,6 +16,7 @@ from scipy import optimize
 
 from benchmark.core.effects import EffectContext, effect_context, load_effects
 from benchmark.core.uncertainty import misfit_ratio
+from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.noise import startup_noise
 from benchmark.problems.timedomain.diagnosis.pipeline import STATUSES, screen
 from benchmark.problems.timedomain.extended import IDX, base_row, simulate_extended_batch
@@ -189,8 +190,7 @@ def test_effect_free_data_have_no_gap(out):
 
 
 def test_two_effects_at_once_are_both_named(out):
-    doc = _diagnose(out, "two", "effects=[double_cage,temperature_drift]", "+effect_size.temperature_drift=15.0",
-                    "diagnosis.fit_iterations=8")
+    doc = _diagnose(out, "two", "effects=[double_cage,temperature_drift]", "+effect_size.temperature_drift=15.0")
     _check_contract(doc)
     assert set(doc["effects"]) == {"double_cage", "temperature_drift"}, doc["selection"]
     assert doc["status"] in ("explained", "partly_explained")
@@ -224,7 +224,7 @@ def test_diagnosis_never_opens_truth_files(tmp_path):
         from tests.conftest import compose_config
         from benchmark.core.harness import run_diagnosis
         cfg = compose_config(["data.path={ds}", "budget=300", "polish_budget=100", "candidates=[double_cage]",
-                              "diagnosis.fit_iterations=4", "figures=false"], name="diagnose")
+                              "diagnosis.max_iterations=4", "figures=false"], name="diagnose")
         doc = run_diagnosis(cfg, Path("{tmp_path / 'out'}"))
         print("VERDICT", doc["verdict"])
         print("OPENED_TRUTH", [p for p in opened if "truth" in Path(p).name])
@@ -288,7 +288,7 @@ def test_samples_the_conditioning_masked_weigh_nothing_in_the_diagnosis(paper_re
                                                      input_hold="zoh"))
     used = data.used()
     assert (~used).sum() == 2 * 300  # i_alpha and i_beta, not the speed
-    a, b = data.folds()
+    a, b = segment_folds(data)
     assert not np.any((a | b) & ~used) and np.all((a | b) == used)
     truth = {k: getattr(PAPER_MOTOR, k) for k in ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")}
     model = JointModel(data, 2, [], _ctx(), truth, 1.0)
@@ -300,14 +300,16 @@ def test_samples_the_conditioning_masked_weigh_nothing_in_the_diagnosis(paper_re
     assert fit.held_used.size == used.sum() and fit.chi2 == pytest.approx(np.mean(r[used] ** 2))
 
 
-def test_a_short_free_stop_is_shared_by_both_folds(paper_records):
-    """A load that brakes the shaft stops it within a fraction of a second: the stop's fold
-    blocks shrink to a quarter of the coast-down, so both folds hold two blocks of it (with the
-    fixed one-second blocks a stop under a second fell into fold A whole, and fold B's fit,
-    without the friction it measures, predicted it 100 times worse than the noise). The paper's
-    ten-second stop keeps one-second blocks."""
+def test_every_segment_of_the_experiment_is_shared_by_both_folds(paper_records):
+    """The folds are cut by segment: each of the electrical start, the acceleration, the steady
+    state and the free stop is split into four contiguous blocks that alternate between the folds,
+    so each fold holds half of every segment, in blocks a quarter of it long. A load that brakes
+    the shaft stops it within a fraction of a second: both folds still hold two blocks of that
+    stop (with fixed one-second blocks it fell into fold A whole, and fold B's fit, without the
+    friction it measures, predicted it 100 times worse than the noise)."""
     from benchmark.problems.timedomain.data import StartupDataset, StartupRecord, StopRecord
     from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData
+    from benchmark.problems.timedomain.diagnosis.folds import segment_masks
 
     s = paper_records["startup"]
     rec = StartupRecord(t=s["t"], v_alpha=s["v_alpha"], v_beta=s["v_beta"], i_alpha=s["i_alpha"],
@@ -317,17 +319,12 @@ def test_a_short_free_stop_is_shared_by_both_folds(paper_records):
     fast = StopRecord(t=t, speed=np.where(t < 0.6, w0 * (1.0 - t / 0.6) ** 2, 0.0))
     data = DiagnosisData.from_dataset(StartupDataset(pole_pairs=1, sample_time=1 / 12000, startups=[rec],
                                                      stops=[fast], input_hold="zoh"))
-    n_stop = len(data.stop_t)
-    assert 0.5 < data.stop_t[-1] < 0.6 and data.stop_block() == pytest.approx(data.stop_t[-1] / 4, rel=0.01)
-    a, b = data.folds()
-    stop_a, stop_b = a[-n_stop:], b[-n_stop:]
-    assert 0.4 < stop_a.mean() < 0.6 and 0.4 < stop_b.mean() < 0.6
-    assert np.count_nonzero(np.diff(stop_a.astype(int))) >= 3  # A, B, A, B: two blocks each
-    st = paper_records["stop"]
-    slow = DiagnosisData.from_dataset(StartupDataset(pole_pairs=1, sample_time=1 / 12000, startups=[rec],
-                                                     stops=[StopRecord(t=st["t"], speed=st["speed"])],
-                                                     input_hold="zoh"))
-    assert slow.stop_t[-1] > 4.0 and slow.stop_block() == 1.0
+    a, b = segment_folds(data)
+    for name, m in segment_masks(data).items():
+        share = a[m].mean()
+        changes = np.count_nonzero(np.diff(a[m][: m.sum() // (3 if name != "free_stop" else 1)].astype(int)))
+        assert 0.4 < share < 0.6 and changes == 3, (name, share, changes)  # A, B, A, B
+    assert 0.5 < data.stop_t[-1] < 0.6
 
 
 def test_the_base_identification_keeps_the_lower_cost_of_two_seeds_and_says_when_they_disagree(out, monkeypatch):

@@ -33,8 +33,7 @@ def test_a_load_step_the_stop_reads_as_friction_is_named_not_a_double_cage(tmp_p
     folder = tmp_path / "set"
     make_motulator_dataset(MOTOR, "six_step", {"load_torque": STEP}, NOISE, 53869196, folder, 0.5, 12000.0, True)
     (folder / "truth.yaml").unlink()
-    doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "double_cage", "iron_loss", "speed_sensor_gain"],
-                        "diagnosis.fit_iterations=8")
+    doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "double_cage", "iron_loss", "speed_sensor_gain"])
     gap = (doc["gap_before"]["heldout_rms_over_noise"], doc["gap_after"]["heldout_rms_over_noise"])
     base = doc["base"]["estimate"]
     print(doc["status"], doc["verdict"], gap, base["fc"], doc["per_effect"])

@@ -6,7 +6,9 @@ probes compress above 2.3 times the rated current (a knee). With fold blocks of 
 periods the first and largest peaks all fell into fold A: fold B's fit could not see the knee,
 its prediction of fold A stayed at 200 times the noise, and the tachometer tried next, with a gain
 error of 1e-4, took the credit when its own fit happened to restart near the knee (verdict
-``current_sensor_saturation+speed_sensor_gain``). Two more things kept the held-out misfit up:
+``current_sensor_saturation+speed_sensor_gain``). The folds are now cut by segment of the
+experiment (:mod:`~benchmark.problems.timedomain.diagnosis.folds`): the electrical start's three
+periods in four blocks, so both folds hold its peaks. Two more things kept the held-out misfit up:
 fold A's fit had stopped in a worse basin than fold B's point, on fold A's own samples
 (``Selector.cross_start`` now refits a fold from the other fold's point where that fits it
 better), and the probe saturation then is the whole story.
@@ -18,7 +20,8 @@ import numpy as np
 import yaml
 
 from benchmark.problems.timedomain.data import load_startup_dataset
-from benchmark.problems.timedomain.diagnosis.fit import SHORT_BLOCK_PERIODS, DiagnosisData
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData
+from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from tests.conftest import diagnose_with, remade_blind_set
 
 BLIND_PROBE_KNEE = yaml.safe_load("""
@@ -64,17 +67,13 @@ def test_each_fold_holds_large_peaks_of_the_start(tmp_path):
     """The probe's knee is at 43.9 A. With two-period blocks fold B's largest current was 35 A
     (every sample above 60 A in fold A); now each fold holds over a hundred samples above 60 A."""
     data = DiagnosisData.from_dataset(load_startup_dataset(remade(tmp_path)))
-    fold_a, _ = data.folds()
+    fold_a, _ = segment_folds(data)
     n = data.n_startup
     in_a, used = fold_a[:n], data.used()[:n]  # the i_alpha part; every channel has the same blocks
     t = data.t - data.t[0]
-    f = data.supply_frequency
-    early = t < SHORT_BLOCK_PERIODS / f
-    changes = np.flatnonzero(np.diff(np.floor(2.0 * f * t[early]).astype(int) % 2) != 0)
-    assert len(changes) == 2 * SHORT_BLOCK_PERIODS - 1  # half-period blocks over the first periods
     i_mag = np.hypot(data.meas[0], data.meas[1])
     assert np.sum(i_mag[in_a & used] > 60.0) > 100 and np.sum(i_mag[~in_a & used] > 60.0) > 100
-    two_period_a = (np.floor(t * f / 2.0).astype(int) % 2) == 0
+    two_period_a = (np.floor(t * data.supply_frequency / 2.0).astype(int) % 2) == 0
     assert np.max(i_mag[~two_period_a & used]) < 43.9  # what the old blocks gave fold B
 
 

@@ -193,19 +193,20 @@ def render_markdown(doc: dict) -> str:
              f"{100 * doc['explained_share']:.0f} %.", "",
              f"Where: {loc['summary']}.", ""]
     if doc["per_effect"]:
-        lines += ["| effect (in order of selection) | own share (drop-one) | fitted parameters (+- standard error) |",
-                  "|---|---|---|"]
+        lines += ["| effect (in order of selection) | own share (drop-one) | share beside the others (the rule's) "
+                  "| fitted parameters (+- standard error) |", "|---|---|---|---|"]
         for pe in doc["per_effect"]:
             par = ", ".join(f"{k} = {v['value']:.4g} +- {v['standard_error']:.2g}" for k, v in pe["parameters"].items())
-            lines.append(f"| {pe['effect']} | {100 * pe['drop_one_share']:.0f} % | {par} |")
+            lines.append(f"| {pe['effect']} | {100 * pe['drop_one_share']:.0f} % "
+                         f"| {100 * pe['share_beside_the_others']:.0f} % | {par} |")
+        lines.append(f"\nAn effect earns its place when the model without it is above the noise band and it removes "
+                     f"at least {100 * doc['rule']['selection_share']:.0f} % of the excess that model leaves.")
         lines.append("")
     for group in doc["indistinguishable"]:
         lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")
     if doc.get("pruned"):
         lines.append("Chosen, then dropped (no longer earning its place beside the others): "
                      + ", ".join(doc["pruned"]) + ".")
-    if doc.get("weak_effects"):
-        lines.append(f"Best candidates, removing too little to explain the gap: {', '.join(doc['weak_effects'])}.")
     for ex in doc["excluded"]:
         lines.append(f"Not a candidate: {ex['effect']}: {ex['reason']}.")
     for h in doc.get("held_by_base", []):
@@ -225,32 +226,24 @@ def render_markdown(doc: dict) -> str:
         lines += [f"| {k + 1} | {w['start_s']:.4g} | {w['end_s']:.4g} | {100 * w['excess_share']:.0f} % |"
                   for k, w in enumerate(loc["excess_windows"])]
     for rnd in doc["selection"]:
+        start = f"base{''.join(' + ' + e for e in rnd['from'])}"
         if rnd.get("pairs"):
-            lines += ["", f"## Pair look-ahead from base{''.join(' + ' + e for e in rnd['from'])} (no single "
-                          "candidate earns; each pair fitted on fold A, scored on fold B, the best fitted fully)", "",
-                      "| pair | held-out chi^2 (fold B) |", "|---|---|"]
-            lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} |" for r in rnd["screening"][:8]]
-            lines += ["", "| pair | held-out chi^2 | share of the excess removed | criterion | earns |",
-                      "|---|---|---|---|---|"]
-            lines += [f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
-                      f"| {r['criterion']:.1f} | {'yes' if r['earns'] else 'no'} |" for r in rnd["candidates"]]
+            lines += ["", f"## Pairs from {start} (no single candidate earns its place; each pair fitted briefly "
+                          "on fold A and scored on fold B, those that may earn fitted fully)", "",
+                      "| pair | held-out chi^2 (fold B) | may earn |", "|---|---|---|"]
+            lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} | {'yes' if r['may_earn'] else 'no'} |"
+                      for r in rnd["screening"][:8]]
+            lines += ["", "| pair | held-out chi^2 | shares beside each other | earns |", "|---|---|---|---|"]
+            lines += [f"| {r['effect']} | {r['heldout_chi2']:.3f} | "
+                      + ", ".join(f"{k} {100 * v:.0f} %" for k, v in r["shares_beside_each_other"].items())
+                      + f" | {'yes' if r['earns'] else 'no'} |" for r in rnd["candidates"]]
             continue
-        if "screening" in rnd:
-            lines += ["", f"## Screening from base{''.join(' + ' + e for e in rnd['from'])} "
-                          "(each candidate fitted on fold A, scored on fold B)", "",
-                      "| candidate | held-out chi^2 (fold B) |", "|---|---|"]
-            lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} |" for r in rnd["screening"]]
-            lines.append(f"\nWithout a new effect: {rnd['screening'][0]['heldout_chi2_base_fold_B']:.3f}; "
-                         f"kept: {', '.join(rnd['kept'])}.")
-            continue
-        lines += ["", f"## Selection round {rnd['round']} (from base{''.join(' + ' + e for e in rnd['from'])}, "
-                      f"held-out chi^2 {rnd['heldout_chi2_from']:.3f}, "
-                      f"effective samples {rnd['effective_samples']:.0f})",
-                  "", "| candidate | held-out chi^2 | share of the excess removed | criterion | earns |",
-                  "|---|---|---|---|---|"]
+        lines += ["", f"## Selection round {rnd['round']} (from {start}, held-out chi^2 "
+                      f"{rnd['heldout_chi2_from']:.3f})", "",
+                  "| candidate | held-out chi^2 | share of the excess removed | earns |", "|---|---|---|---|"]
         for r in rnd["candidates"]:
             lines.append(f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
-                         f"| {r['criterion']:.1f} | {'yes' if r['earns'] else 'no'} |")
+                         f"| {'yes' if r['earns'] else 'no'} |")
     lines += ["", "Noise estimated from the data: "
               + "; ".join(f"{k} {v['std']:.3g} (+-{100 * v['rel_uncertainty']:.0f} %, {v['method']})"
                           for k, v in doc["noise"].items()),

@@ -1,0 +1,105 @@
+"""The diagnosis's decision rule: one held-out score, one selection share.
+
+**Score.** ``S(X)``: the held-out chi^2 per residual of the base model plus the effect set
+``X``: each channel's residual divided by its noise estimate (whitened: 1 = the noise alone),
+each of the two folds (:mod:`.folds`, cut by segment of the experiment) predicted by the fit on
+the other, the squares averaged over every sample in a fold.
+
+**Band.** The model is at the noise level when the held-out RMS over noise ``sqrt(S)`` is
+within ``misfit_ratio``'s band ``1 +- (z u + floor)`` (``u`` the noise estimate's and the
+residual's own one-sigma uncertainty; :func:`benchmark.core.uncertainty.misfit_ratio`, the
+band of the identification's fit-quality verdict). ``b`` is its upper edge.
+
+**Rule.** An effect ``e`` earns its place in a model ``M`` (``e`` in ``M``) when the model
+without it is visibly off, ``S(M - e) > b^2``, and ``e`` removes at least the share ``tau``
+of the excess that the model without it leaves:
+
+    D(e | M) = (S(M - e) - S(M)) / (S(M - e) - 1) >= tau.
+
+The same test decides everything:
+
+* forward: the candidate with the lowest ``S(M + e)`` enters when it earns its place in
+  ``M + e`` (``M`` refitted is ``M + e`` without ``e``);
+* pairs: when no single candidate does, a pair ``{a, b}`` enters when each earns its place in
+  ``M + a + b`` (two effects that mask each other: neither alone removes much);
+* backward: every effect of the chosen set must still earn its place beside the others
+  (``M - e`` refitted from several starts), else the weakest is dropped and the check repeats.
+
+``tau`` is calibrated (``benchmark.studies.calibration``): the smallest share whose rate of
+naming an effect that was not injected, over development data with every effect in its varied
+forms, stays within the target; see ``docs/diagnosis.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from benchmark.core.noise_estimates import ar1_coefficient
+
+STATUSES = ("no_gap", "explained", "partly_explained", "unexplained")
+
+
+def share_removed(without: float, with_: float) -> float:
+    """``D``: the share of the excess held-out chi^2 of a model without an effect (``without``,
+    per residual; 1 = noise) that the effect removes (``with_``: the model with it); 0 when the
+    model without it has no excess."""
+    excess = without - 1.0
+    return float((without - with_) / excess) if excess > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class Rule:
+    """The selection rule. ``share``: ``tau``, the share of the excess an effect must remove."""
+
+    share: float
+
+    def earns(self, without: float, with_: float, band: float) -> bool:
+        """Whether an effect earns its place: the model without it (held-out chi^2 ``without``)
+        is above the noise band ``band`` (upper edge of the held-out RMS over noise) and the
+        effect removes at least :attr:`share` of its excess (``with_``: the model with it)."""
+        return bool(without > band**2 and share_removed(without, with_) >= self.share)
+
+
+def effective_count(d: np.ndarray, groups: list[np.ndarray]) -> float:
+    """Effective number of independent values of ``d`` (``n (1 - phi)/(1 + phi)`` per group of
+    indices, ``phi`` the group's AR(1) coefficient; at least 2)."""
+    total = 0.0
+    for g in groups:
+        x = d[g]
+        if len(x) < 3:
+            continue
+        phi = ar1_coefficient(x - x.mean())
+        total += len(x) * (1 - phi) / (1 + phi)
+    return max(total, 2.0)
+
+
+def score_difference(held_a: np.ndarray, held_b: np.ndarray, groups: list[np.ndarray]) -> tuple[float, float]:
+    """Mean and standard error of ``held_a^2 - held_b^2`` (two models' held-out residuals on the
+    same samples; ``groups``: index arrays of the channels, each with its own correlation)."""
+    d = held_a**2 - held_b**2
+    n = effective_count(d, groups)
+    return float(np.mean(d)), float(np.std(d) / math.sqrt(n))
+
+
+def status_of(before, after, effects: list[str]) -> tuple[str, str, float]:
+    """(status, verdict, explained share) from the held-out fit qualities ``before`` (the base)
+    and ``after`` (the chosen set; :class:`~benchmark.core.uncertainty.FitQuality`):
+
+    * ``no_gap``: the base is within the noise band;
+    * ``explained``: effects were named and what is left is within the band;
+    * ``partly_explained``: effects were named, a gap beyond the band is left;
+    * ``unexplained``: a gap and no effect earns its place.
+    """
+    excess = before.ratio**2 - 1.0
+    share = 0.0
+    if effects and excess > 0:
+        share = float(np.clip((before.ratio**2 - after.ratio**2) / excess, 0.0, 1.0))
+    if before.ratio <= before.threshold:
+        return "no_gap", "none", 0.0
+    if not effects:
+        return "unexplained", "unexplained", 0.0
+    status = "explained" if after.ratio <= after.threshold else "partly_explained"
+    return status, "+".join(effects), share
