@@ -335,7 +335,9 @@ LOAD_CHANGE_MIN = 0.05
 def load_change_time(t: np.ndarray, i_mag: np.ndarray, w_e: float, t90: float, fall: bool = False) -> float | None:
     """Where the current envelope rises most abruptly after the start-up (s from ``t[0]``),
     or None when it rises by less than :data:`LOAD_CHANGE_MIN` of its level (with ``fall``:
-    where it falls most abruptly after ``t90``, a switched load's end).
+    where it falls most abruptly after ``t90``, however little: a switched load's likely end, a
+    starting value only; a generator's torque decays with its armature and the rotor's speed, so
+    its fall spreads over periods and one period's change can be a few per cent).
 
     ``i_mag``: the current space vector's magnitude (A); ``w_e``: supply angular frequency
     (rad/s); ``t90``: time to 90 % of the final speed (s). The envelope is the magnitude's mean
@@ -362,6 +364,6 @@ def load_change_time(t: np.ndarray, i_mag: np.ndarray, w_e: float, t90: float, f
     jump = before - after if fall else after - before
     j = int(np.argmax(jump))
     level = float(np.mean(i_mag[start:]))
-    if level <= 0 or jump[j] < LOAD_CHANGE_MIN * level:
+    if level <= 0 or jump[j] < (0.0 if fall else LOAD_CHANGE_MIN) * level:
         return None
     return float(t[k[j]] - t[0])

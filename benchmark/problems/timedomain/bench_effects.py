@@ -402,8 +402,10 @@ class LoadTorque(Effect):
             lo, hi = self.extra_bounds(ctx)
             on = float(np.clip(change / ctx.record_duration, lo[3], hi[3]))
             starts.insert(0, np.array([0.0, 0.0, 0.2, on, 0.0, ts, 1.0]))
-            off = 1.0 if ctx.load_release is None else float(np.clip(ctx.load_release / ctx.record_duration, on, 1.0))
-            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, off]))  # a DC machine loaded there
+            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, 1.0]))  # a DC machine loaded there
+            if ctx.load_release is not None:  # ... and switched off where the envelope falls most
+                off = float(np.clip(ctx.load_release / ctx.record_duration, on, 1.0))
+                starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, off]))
         return starts
 
     def starts_from_base(self, base, ctx):
