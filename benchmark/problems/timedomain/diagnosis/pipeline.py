@@ -63,6 +63,7 @@ import numpy as np
 from benchmark.core.effects import Effect, effect_context
 from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
 from benchmark.problems.timedomain.diagnosis.noise import combined
@@ -368,8 +369,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     base = sel.model([])
     x0 = np.array([centre[n] for n in base.base_names])
     base_full = base.fit(x0, None, 2 * settings.fit_iterations)
-    base_fit = sel.cross_start(SetFit(base, {"A": base.fit(base_full, fold_a, settings.fit_iterations),
-                                             "B": base.fit(base_full, fold_b, settings.fit_iterations)}, masks))
+    fold_fits = side_by_side(lambda m: base.fit(base_full, m, settings.fit_iterations), (fold_a, fold_b))
+    base_fit = sel.cross_start(SetFit(base, dict(zip(("A", "B"), fold_fits, strict=True)), masks))
     counts = {ch: s.stop - s.start for ch, s in data.channel_slices().items()}
     noise_all = combined(data.noise, counts)
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from benchmark.core.effects import Effect
 from benchmark.core.noise_estimates import ar1_coefficient
+from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 
 
@@ -96,8 +97,8 @@ class Selector:
         model = self.model(effects)
         prev = starts_from.model
         new = list(effects)[len(prev.effects):]
-        xs = {}
-        for f in ("A", "B"):
+
+        def fold_fit(f):
             x_prev = starts_from.xs[f]
             if drop is not None:
                 keep = np.ones(len(x_prev), bool)
@@ -117,7 +118,9 @@ class Selector:
             if new:
                 best = self.converge(model, best, self.masks[f], self.settings.fit_iterations,
                                      starts_from.ssr_fold[f])
-            xs[f] = best
+            return best
+
+        xs = dict(zip(("A", "B"), side_by_side(fold_fit, ("A", "B")), strict=True))
         return self.cross_start(SetFit(model, xs, self.masks))
 
     def starts_with(self, model: JointModel, x_prev: np.ndarray, new, every: bool = True) -> list[np.ndarray]:
@@ -236,11 +239,11 @@ class Selector:
         fitted on fold A only (first starting values, ``screen_iterations``; with an effect's
         start grid also from the grid's best value, the better fit kept), scored on fold B.
         Returns the additions ordered by that held-out chi^2 and the table."""
-        rows = []
         masks = self.masks
         held_cur = float(np.mean(cur.held[masks["B"]] ** 2))  # fold B predicted by the fit on fold A
         ssr_cur = cur.ssr_fold["A"]
-        for add in additions:
+
+        def look(add):
             if progress:
                 progress("screening " + " + ".join([e.name for e in chosen] + [e.name for e in add]))
             model = self.model(list(chosen) + list(add))
@@ -253,8 +256,10 @@ class Selector:
                 if x is None or s < best:
                     x, best = xf, s
             chi2 = float(np.mean(model.residuals(x[None, :])[0][masks["B"]] ** 2))
-            rows.append({"effect": "+".join(e.name for e in add), "heldout_chi2_fold_B": chi2,
-                         "heldout_chi2_base_fold_B": held_cur})
+            return {"effect": "+".join(e.name for e in add), "heldout_chi2_fold_B": chi2,
+                    "heldout_chi2_base_fold_B": held_cur}
+
+        rows = side_by_side(look, additions)
         order = np.argsort([r["heldout_chi2_fold_B"] for r in rows])
         return [additions[i] for i in order], [rows[i] for i in order]
 
@@ -297,11 +302,13 @@ class Selector:
                 pool += [a[0] for a in kept[st.screen_keep:] if a[0] in suspects]
                 rounds.append({"round": 0, "from": [e.name for e in chosen], "screening": screened,
                                "kept": [e.name for e in pool]})
-            trials = []
-            for eff in pool:
+
+            def trial(eff, chosen=tuple(chosen), cur=cur):
                 if progress:
                     progress(" + ".join([e.name for e in chosen] + [eff.name]))
-                trials.append((eff, self.fit_set(chosen + [eff], cur)))
+                return eff, self.fit_set([*chosen, eff], cur)
+
+            trials = side_by_side(trial, pool)
             n_eff = effective_samples(self.data, cur.r_in, cur.used)
             rows = [self.score(eff.name, len(eff.extra_names), sf, cur, n_eff, band, st.min_excess_reduction)
                     for eff, sf in trials]
@@ -344,12 +351,16 @@ class Selector:
         rounds.append(rnd)
         best_single = max([0.0] + list(alone.values()))
         found = None
-        for a, b in kept[:st.pair_keep]:
+
+        def pair_fit(pair):
+            a, b = pair
             if alone.get(b.name, -np.inf) > alone.get(a.name, -np.inf):
                 a, b = b, a  # the one that removed more alone enters first
             if progress:
                 progress(" + ".join([e.name for e in chosen] + [a.name, b.name]))
-            sf = self.fit_set(chosen + [a, b], cur)
+            return a, b, self.fit_set(chosen + [a, b], cur)
+
+        for a, b, sf in side_by_side(pair_fit, kept[:st.pair_keep]):
             row = self.score(f"{a.name}+{b.name}", len(a.extra_names) + len(b.extra_names), sf, cur, n_eff, band,
                              2.0 * st.min_excess_reduction)
             row["earns"] = bool(row["earns"] and row["excess_reduction"] - best_single >= st.min_excess_reduction)
@@ -390,8 +401,8 @@ class Selector:
             effects = final.model.effects
             if len(effects) <= 1:
                 return final, [base_fit] * len(effects), pruned
-            withouts = [self.fit_set([e for e in effects if e is not eff], final, drop=j)
-                        for j, eff in enumerate(effects)]
+            withouts = side_by_side(lambda je, effects=effects, final=final: self.fit_set(
+                [e for e in effects if e is not je[1]], final, drop=je[0]), list(enumerate(effects)))
             rise = [w.chi2 - final.chi2 for w in withouts]
             j = int(np.argmin(rise))
             left = withouts[j].chi2 - 1.0
