@@ -87,20 +87,20 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
     base_rows,
     valid_rows,
 )
-from benchmark.problems.timedomain.simulation import substep_voltages
+from benchmark.problems.timedomain.simulation import run_split, substep_voltages
 
 N_STATES = 12
 SQRT3_2 = math.sqrt(3.0) / 2.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _sat(x, k, ref, ex):
     if k == 0.0:
         return 1.0
     return 1.0 + k * (x / ref) ** ex
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _leak_gain(c, dmag):
     """Stator current over (leakage flux / L_sigma): 1 unless the leakage saturates."""
     sat = _sat(dmag, c[10], c[11], c[12])
@@ -110,7 +110,7 @@ def _leak_gain(c, dmag):
     return sat
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _drop_sign(i, i0):
     if i0 > 0.0:
         return math.tanh(i / i0)
@@ -121,7 +121,7 @@ def _drop_sign(i, i0):
     return 0.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _loads(c, t, w_mech):
     """(passive Coulomb-like load torque, speed-dependent load torque) at time t, N m."""
     t_pass = c[25]
@@ -138,7 +138,7 @@ def _loads(c, t, w_mech):
     return t_pass, t_dyn
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _switched(t, t_on, t_rise, tau, t_off):
     """Envelope (0-1) of the switched load at time t: on at ``t_on`` over a first-order rise of
     time constant ``tau`` (an armature circuit), off again at ``t_off`` (when after ``t_on``)
@@ -155,7 +155,7 @@ def _switched(t, t_on, t_rise, tau, t_off):
     return 1.0 - math.exp(-(t - t_on) / tau)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _coupling_torque(twist, slip_speed, k, c, half_play):
     """Torque (N m) through a coupling of stiffness ``k`` (N m/rad) and damping ``c`` (N m s/rad)
     twisted by ``twist`` (rad) at ``slip_speed`` (rad/s), with free play of half-width
@@ -169,7 +169,7 @@ def _coupling_torque(twist, slip_speed, k, c, half_play):
     return 0.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _resist(direction, drive, tc):
     """Coulomb torque: against the motion, or at standstill the drive clipped to +-tc."""
     if direction != 0.0:
@@ -181,14 +181,14 @@ def _resist(direction, drive, tc):
     return drive
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _t_mode(c):
     """The row's magnetising branch saturates at a T circuit's node: a split is set, the
     magnetising curve bends, and the leakage does not saturate (see the module docstring)."""
     return c[36] > 0.0 and (c[7] != 0.0 or c[23] != 0.0) and c[10] == 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _t_solve(c, x):
     """T mode: stator and total rotor currents (T units, A) and the referral ``Lm/(Lm + Llr)``."""
     L_sig, LM, k = c[1], c[2], c[36]
@@ -230,7 +230,7 @@ def _t_solve(c, x):
     return (x[0] - pm_a) / Lls, (x[1] - pm_b) / Lls, (pr_a - pm_a) / Llr, (pr_b - pm_b) / Llr, g0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
     """Current (A) of a rotor loop of resistance ``R`` (ohm; 0: absent, no current) and leakage
     ``L`` (H) whose flux linkage (Wb) is ``p`` over the magnetising node's ``pm``; ``gain``
@@ -240,7 +240,7 @@ def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
     return 0.0, 0.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
     """d psi / dt (V) of a rotor loop (resistance ``R`` ohm, 0: absent; ``R_t`` at its
     temperature) carrying ``i`` (A) at the electrical rotor speed ``w`` (rad/s)."""
@@ -249,7 +249,7 @@ def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
     return 0.0, 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
     gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
@@ -355,7 +355,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     return t_m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _stator_current(c, x):
     if _t_mode(c):
         ia, ib, _, _, _ = _t_solve(c, x)
@@ -366,7 +366,7 @@ def _stator_current(c, x):
     return d_a * g, d_b * g
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _terminal_current(c, x, v_a, v_b):
     """Recorded stator current: the branch current plus the stator-side iron-loss current."""
     ia, ib = _stator_current(c, x)
@@ -387,12 +387,12 @@ def _terminal_current(c, x, v_a, v_b):
     return ia + k * (v_a - rs * ia), ib + k * (v_b - rs * ib)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _sign(v):
     return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _stick(c, x, w0, wl0, t):
     """After a step: a speed that crossed zero against its Coulomb torque sticks at zero."""
     p = c[20]
@@ -420,17 +420,19 @@ def _stick(c, x, w0, wl0, t):
             x[6] = 0.0
 
 
-@numba.njit(cache=True)
-def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0):
+@numba.njit(cache=True, _nrt=False)
+def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
     """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s) (the load side's on a
     two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps)."""
     n = v_a.shape[0]
-    x = x0.copy()
-    k1 = np.empty(N_STATES)
-    k2 = np.empty(N_STATES)
-    k3 = np.empty(N_STATES)
-    k4 = np.empty(N_STATES)
-    xt = np.empty(N_STATES)
+    x = work[0]
+    for s in range(N_STATES):
+        x[s] = x0[s]
+    k1 = work[1]
+    k2 = work[2]
+    k3 = work[3]
+    k4 = work[4]
+    xt = work[5]
     hs = h / substeps
     p = c[20]
     two = c[31] > 0.0
@@ -479,19 +481,31 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0):
         x0[s] = x[s]
 
 
-@numba.njit(cache=True, parallel=True)
-def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
-    """Outputs of a population of extended rows from rest: (n_pop, 3, N) i_alpha, i_beta (A),
-    mechanical speed (rad/s); NaN from where a candidate diverges (or for invalid rows)."""
-    n_pop = rows.shape[0]
-    n = v_a.shape[0]
-    out = np.full((n_pop, 3, n), np.nan)
-    for m in numba.prange(n_pop):
+@numba.njit(cache=True, nogil=True)
+def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
+    """Rows ``start..stop-1`` of ``rows`` into ``out`` (left NaN for invalid rows); releases the GIL."""
+    work = np.empty((6, N_STATES))
+    x0 = np.empty(N_STATES)
+    for m in range(start, stop):
         c = rows[m]
         if not np.isfinite(c[0]):
             continue
-        x0 = np.zeros(N_STATES)
-        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0)
+        x0[:] = 0.0
+        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0, work)
+
+
+def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
+    """Outputs of a population of extended rows from rest: (n_pop, 3, N) i_alpha, i_beta (A),
+    mechanical speed (rad/s); NaN from where a candidate diverges (or for invalid rows).
+
+    The rows are split into blocks run in parallel (:func:`kernel_threads` of them; one inside
+    a worker of the batched fitting engine, which runs fits side by side itself); each row's
+    outputs are the same bit for bit whatever the blocks."""
+    rows = np.ascontiguousarray(rows, dtype=float)
+    v_a = np.ascontiguousarray(v_a, dtype=float)
+    v_b = np.ascontiguousarray(v_b, dtype=float)
+    out = np.full((rows.shape[0], 3, v_a.shape[0]), np.nan)
+    run_split(_simulate_block, rows.shape[0], rows, v_a, v_b, bool(linear), float(h), int(substeps), out)
     return out
 
 
@@ -500,5 +514,5 @@ def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
     """One trajectory from state ``x0`` (modified in place to the final state) starting at time
     ``t0`` (s): (3, N)."""
     out = np.empty((3, v_a.shape[0]))
-    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0)
+    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((6, N_STATES)))
     return out

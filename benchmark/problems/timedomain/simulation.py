@@ -324,6 +324,46 @@ def _executor(workers: int) -> ThreadPoolExecutor:
         return st["pool"]
 
 
+_serial = threading.local()
+
+
+def kernel_threads() -> int:
+    """Threads a batched kernel call may use: numba's thread count, or 1 in a thread that runs
+    its own share of a parallel job (:func:`serial_kernels`)."""
+    return 1 if getattr(_serial, "on", False) else numba.get_num_threads()
+
+
+class serial_kernels:
+    """Context: kernel calls made by this thread run on this thread alone (a worker of a pool
+    that already runs jobs side by side on every core)."""
+
+    def __enter__(self):
+        self._was = getattr(_serial, "on", False)
+        _serial.on = True
+        return self
+
+    def __exit__(self, *exc):
+        _serial.on = self._was
+        return False
+
+
+def run_split(block_fn, n: int, *args) -> None:
+    """``block_fn(start, stop, *args)`` over ``0..n-1`` in :func:`kernel_threads` nearly equal
+    blocks run in parallel (the compiled block functions release the GIL); the calling thread
+    takes the first."""
+    nb = max(1, min(kernel_threads(), n))
+    bounds = [b * n // nb for b in range(nb + 1)]
+    futures = []
+    if nb > 1:
+        pool = _executor(nb - 1)
+        futures = [pool.submit(block_fn, bounds[b], bounds[b + 1], *args) for b in range(1, nb)]
+    try:
+        block_fn(bounds[0], bounds[1], *args)
+    finally:
+        for f in futures:
+            f.result()
+
+
 def _run_blocks(block_fn, bounds, *args) -> None:
     """Run ``block_fn(start, stop, W, *args)`` for every block with its own work buffer ``W``, in
     parallel (the compiled block functions release the GIL); the calling thread takes the first."""
@@ -414,7 +454,7 @@ def startup_outputs_batch(coef, v_a, v_b, linear, h, p):
     return _outputs_batch(coef, v_a, v_b, linear, h, p, LANES, numba.get_num_threads())
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def substep_voltages(v_a, v_b, k, linear, j, substeps):
     """Input of sub-step ``j`` of ``substeps`` in the sample interval ``k``: its start fraction
     ``f0`` and the voltages at its start, midpoint and end (held, or interpolated linearly

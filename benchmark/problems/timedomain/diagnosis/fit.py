@@ -15,7 +15,6 @@ batched through the kernel), in coordinates normalised to their bounds.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +24,8 @@ from benchmark.core.effects import Effect, EffectContext
 from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.core.uncertainty import hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.diagnosis.engine import quiet
+from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
 from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
@@ -298,24 +299,30 @@ class JointModel:
             y = eff.stop_true_speed(y, X[:, s], self.ctx)
             w0 = eff.stop_true_speed(w0, X[:, s], self.ctx)
         h = 1e-3 * max(abs(float(d.stop_w0)), 1.0)
+        coast = self.coast(X, rows)
         with np.errstate(all="ignore"):
-            base = self.free_stop(X, rows, w0)
-            D = (self.free_stop(X, rows, w0 + h) - base) / h
+            base = coast.speed(w0)
+            D = (coast.speed(w0 + h) - base) / h
             step = (np.nansum((y - base) * D, axis=1, keepdims=True)
                     / np.maximum(np.nansum(D * D, axis=1, keepdims=True), 1e-300))
         limit = 0.05 * abs(float(d.stop_w0))
-        stop = self.free_stop(X, rows, w0 + np.clip(np.nan_to_num(step), -limit, limit))
+        stop = coast.speed(w0 + np.clip(np.nan_to_num(step), -limit, limit))
         for eff, s in self._measure_order:  # the same speed sensor records the stop
             stop = eff.measure_stop(stop, X[:, s], self.ctx, d.stop_t, d.stop_speed)
         return stop
 
     def free_stop(self, X: np.ndarray, rows: np.ndarray, w0: np.ndarray | None = None) -> np.ndarray:
         """Speed of the free stop from the speed at its start (``w0`` (n, 1), rad/s; the measured
-        one when None): ``J dw/dt = -(A + B w + C w^2)``
-        with ``A`` Coulomb friction plus the passive load torques (constant, and a step load that
-        came on during the start-up), ``B = fv``, ``C`` a fan load over ``w_ref^2``; closed form
-        (a tangent, or hyperbolic tangent, of time; the exponential when ``C = 0``); the shaft
-        stays at rest once stopped (passive torques hold it)."""
+        one when None): the closed form of :mod:`.free_coast` for the rows' mechanics
+        (:meth:`coast`)."""
+        d = self.data
+        w0 = d.stop_w0 if w0 is None else w0
+        return self.coast(X, rows).speed(np.broadcast_to(np.asarray(w0, float), (len(X), 1)))
+
+    def coast(self, X: np.ndarray, rows: np.ndarray) -> FreeCoast:
+        """The free coast of the rows, ``J dw/dt = -(A + B w + C w^2)`` with ``A`` Coulomb friction
+        plus the passive load torques (constant, and a step load that came on during the
+        start-up), ``B = fv``, ``C`` a fan load over ``w_ref^2``."""
         d = self.data
         theta = self.full_parameters(X)
         J, fv = theta[:, 4:5], theta[:, 5:6]
@@ -327,21 +334,7 @@ class JointModel:
         fv = fv + col["T_s"] * step_on * col["T_s_speed"] / col["w_ref"]  # a switched load that follows speed
         with np.errstate(all="ignore"):
             C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
-        t = d.stop_t[None, :]
-        w0 = d.stop_w0 if w0 is None else w0
-        w0 = np.broadcast_to(np.asarray(w0, float), (len(X), 1))
-        with np.errstate(all="ignore"):
-            tau = J / fv
-            c = A / J
-            w = (w0 + tau * c) * np.exp(-t / tau) - tau * c
-            fan = C[:, 0] > 1e-15  # the complex closed form only where a fan load makes it quadratic
-            if np.any(fan):
-                Af, Cf, Jf, fvf, w0f = A[fan], C[fan], J[fan], fv[fan], w0[fan]
-                q = np.sqrt((4 * Af * Cf - fvf**2).astype(complex))
-                phi0 = np.arctan((2 * Cf * w0f + fvf) / q)
-                w[fan] = np.real((-fvf + q * np.tan(phi0 - q * t / (2 * Jf))) / (2 * Cf))
-            stopped = np.cumsum(~(w > 0), axis=1) > 0
-        return np.where(stopped, 0.0, w)
+        return FreeCoast(d.stop_t, J, fv, A, C)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
         with np.errstate(all="ignore"):
@@ -372,8 +365,7 @@ class JointModel:
             return ((R - r0[None, :]) / h[:, None]).T
 
         u0 = np.clip((np.clip(x0, lo, hi) - lo) / span, 0.0, 1.0)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        with quiet():
             sol = optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale="jac",
                                          xtol=tol, ftol=tol, gtol=1e-8, max_nfev=max_iterations)
         return to_x(sol.x)
@@ -391,8 +383,7 @@ class JointModel:
         r0 = self.residuals(x[None, :])[0]
         R = self.residuals(X)
         J = -((R - r0[None, :]) / h[:, None]).T  # d(model/sigma)/dx (sign does not matter)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        with quiet():
             try:
                 cov = hac_covariance(J, r0, groups=self.data.channel_labels(), aligned=False)
             except (ValueError, np.linalg.LinAlgError):

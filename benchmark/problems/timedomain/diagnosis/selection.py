@@ -31,6 +31,7 @@ import itertools
 import numpy as np
 
 from benchmark.core.effects import Effect
+from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 from benchmark.problems.timedomain.diagnosis.rule import Rule, score_difference, share_removed
 
@@ -109,14 +110,16 @@ class Selector:
             progress(" + ".join(model.effect_names) or "base")
         known = {n for _, extras_from in sources for sf in extras_from for n in sf.names}
         new = [j for j, e in enumerate(model.effects) if e.name not in known]
-        xs = {}
-        for f in FOLDS:
+
+        def fold_fit(f):
             starts = [x for base_from, extras_from in sources
                       for x in self.composed(model, base_from, extras_from, f)]
             starts = self.profiled(model, starts, self.masks[f], new)
             if old is not None:
                 starts.append(old.xs[f])
-            xs[f] = self.best(model, starts, self.masks[f])
+            return self.best(model, starts, self.masks[f])
+
+        xs = dict(zip(FOLDS, side_by_side(fold_fit, FOLDS), strict=True))
         sf = self.cross_start(SetFit(model, xs, self.masks))
         self.memo[key] = sf
         return sf
@@ -248,7 +251,8 @@ class Selector:
             pool = [e for e in candidates if e.name not in cur.names]
             if not pool or cur.chi2 <= band**2 or (cap is not None and len(chosen) >= cap):
                 return cur
-            trials = {e.name: self.fit(chosen + [e], [(cur, [cur])], progress=progress) for e in pool}
+            fits = side_by_side(lambda e, c=chosen, s=cur: self.fit(c + [e], [(s, [s])], progress=progress), pool)
+            trials = {e.name: sf for e, sf in zip(pool, fits, strict=True)}
             rows = sorted((self.row(n, cur, sf, band) for n, sf in trials.items()), key=lambda r: r["heldout_chi2"])
             best = rows[0]
             rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
@@ -281,13 +285,12 @@ class Selector:
                 return -np.inf
             return min(sa - self.rule.share * (sa - 1.0), sb - self.rule.share * (sb - 1.0))
 
-        screened = []
-        for a, b in itertools.combinations(pool, 2):
-            if progress:
-                progress(f"screening {' + '.join(cur.names + [a.name, b.name])}")
-            chi2 = self.screen_pair(cur, a, b, singles)
-            screened.append({"effect": f"{a.name}+{b.name}", "heldout_chi2_fold_B": chi2,
-                             "may_earn": chi2 <= target(a, b), "pair": (a, b)})
+        pairs = list(itertools.combinations(pool, 2))
+        if progress:
+            progress(f"screening {len(pairs)} pairs beside {' + '.join(cur.names) or 'the base'}")
+        chi2s = side_by_side(lambda ab: self.screen_pair(cur, ab[0], ab[1], singles), pairs)
+        screened = [{"effect": f"{a.name}+{b.name}", "heldout_chi2_fold_B": chi2, "may_earn": chi2 <= target(a, b),
+                     "pair": (a, b)} for (a, b), chi2 in zip(pairs, chi2s, strict=True)]
         screened.sort(key=lambda r: r["heldout_chi2_fold_B"])
         rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": cur.names, "pairs": True,
                "screening": [{k: v for k, v in r.items() if k != "pair"} for r in screened],
@@ -332,10 +335,12 @@ class Selector:
         drop-one fit by name, names dropped in turn)."""
         pruned = []
         while cur.names:
-            withouts = {}
-            for e in cur.effects:
+            def drop(e, cur=cur):
                 rest = [x for x in cur.effects if x is not e]
-                withouts[e.name] = self.fit(rest, [(cur, [cur]), (base_fit, [cur])], refit=True, progress=progress)
+                return self.fit(rest, [(cur, [cur]), (base_fit, [cur])], refit=True, progress=progress)
+
+            fits = side_by_side(drop, cur.effects)
+            withouts = {e.name: w for e, w in zip(cur.effects, fits, strict=True)}
             failing = [n for n, w in withouts.items() if not self.rule.earns(w.chi2, cur.chi2, band)]
             if not failing:
                 return cur, withouts, pruned
