@@ -34,9 +34,6 @@ from benchmark.problems.timedomain.simulation import hold_is_linear
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
 DIVERGED = 1e6
-#: Supply periods at the start of the record whose fold blocks are half a period long (see
-#: :meth:`DiagnosisData.folds`).
-SHORT_BLOCK_PERIODS = 4
 
 
 def supply_frequency_of(t, v_alpha, v_beta) -> float:
@@ -153,45 +150,6 @@ class DiagnosisData:
         if self.stop_t is not None:
             parts.append(np.ones(len(self.stop_t), bool))
         return np.concatenate(parts)
-
-    def folds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Two interleaved folds of blocks (of the start-up: half a supply period over its first
-        :data:`SHORT_BLOCK_PERIODS` periods, two periods after; of the stop, a quarter of the
-        time the shaft takes to stop, at most one second): each fold is a held-out set for a fit
-        on the other. Masked samples are in neither.
-
-        The start's first peaks carry what the effects of large currents show (a probe that
-        compresses above twice the rated current, saturating leakage): with two-period blocks
-        the first and largest peaks all fell into one fold, the other fold's fit could not see
-        the knee, and its prediction of the first fold was 200 times the noise whatever the
-        effect (blind plant seed 21, set 7). Half-period blocks give each fold peaks of both
-        signs. A stop shorter than one block would fall into one fold whole and leave the
-        other fold's fit without the friction it measures (a load that brakes the shaft stops
-        it in a fraction of a second)."""
-        f = self.supply_frequency
-        t = self.t - self.t[0]
-        n_short = 2 * SHORT_BLOCK_PERIODS
-        block = np.where(t < SHORT_BLOCK_PERIODS / f, np.floor(2.0 * f * t),
-                         n_short + np.floor((t - SHORT_BLOCK_PERIODS / f) * f / 2.0))
-        kA = (block.astype(int) % 2) == 0
-        parts = [kA] * len(self.startup_channels())
-        if self.stop_t is not None:
-            parts.append((np.floor(self.stop_t / self.stop_block()).astype(int) % 2) == 0)
-        a = np.concatenate(parts)
-        used = self.used()
-        return a & used, ~a & used
-
-    def stop_block(self) -> float:
-        """Length of the stop's fold blocks (s): a quarter of the time until the measured speed
-        first falls below 2 % of its value at the supply's removal (the record's end when it
-        never does), so that each fold holds at least two blocks of the coast-down; at most 1 s,
-        at least two samples."""
-        t, w = self.stop_t, self.stop_speed
-        w0 = abs(float(self.stop_w0)) if self.stop_w0 else float(np.max(np.abs(w)))
-        below = np.flatnonzero(np.abs(w) < 0.02 * w0)
-        t_stop = float(t[below[0]]) if len(below) else float(t[-1])
-        dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
-        return float(np.clip(t_stop / 4.0, 2.0 * dt, 1.0))
 
     def facts(self, base_case: int) -> dict:
         """What the experiment says about itself: which effects can occur in it."""
@@ -321,8 +279,10 @@ class JointModel:
 
     def coast(self, X: np.ndarray, rows: np.ndarray) -> FreeCoast:
         """The free coast of the rows, ``J dw/dt = -(A + B w + C w^2)`` with ``A`` Coulomb friction
-        plus the passive load torques (constant, and a step load that came on during the
-        start-up), ``B = fv``, ``C`` a fan load over ``w_ref^2``."""
+        plus the passive load torques (constant, and the switched load's constant part as it
+        stands at the start-up's end, :func:`switched_at_end`), ``B = fv`` plus the switched
+        load's part that follows speed (a DC generator still on its resistor), ``C`` a fan load
+        over ``w_ref^2``."""
         d = self.data
         theta = self.full_parameters(X)
         J, fv = theta[:, 4:5], theta[:, 5:6]
