@@ -88,6 +88,8 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
 from benchmark.problems.timedomain.simulation import run_split, substep_voltages
 
 N_STATES = 12
+#: Length of the stepper's work rows: the states' derivatives, then the stator current (A).
+N_WORK = N_STATES + 2
 SQRT3_2 = math.sqrt(3.0) / 2.0
 
 
@@ -297,6 +299,8 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
         out[1] = v_b - Rs_t * is_b
     out[2] = e_a
     out[3] = e_b
+    out[N_STATES] = is_a  # the stator branch current at x, for the stepper's output
+    out[N_STATES + 1] = is_b
     out[4], out[5] = _loop_flux_rate(R_r2, R_r2_t, i2_a, i2_b, w, p2_a, p2_b)
     out[10], out[11] = _loop_flux_rate(R_r3, R_r3_t, i3_a, i3_b, w, p3_a, p3_b)
     t_m = 1.5 * p * (ps_a * is_b - ps_b * is_a)
@@ -419,14 +423,18 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
     p = c[20]
     two = c[31] > 0.0
     for k in range(n):
-        if linear:
-            ia, ib = _terminal_current(c, x, v_a[k], v_b[k])
-        elif k > 0:  # a held input: the sample closes the previous interval
-            ia, ib = _terminal_current(c, x, v_a[k - 1], v_b[k - 1])
-        else:
-            ia, ib = _terminal_current(c, x, 0.0, 0.0)
-        out[0, k] = ia
-        out[1, k] = ib
+        # without a stator-side iron loss the recorded current is the stator branch current at
+        # x, which the step's first derivative computes (the same operations): taken from there
+        own = c[34] > 0.0 or k == n - 1
+        if own:
+            if linear:
+                ia, ib = _terminal_current(c, x, v_a[k], v_b[k])
+            elif k > 0:  # a held input: the sample closes the previous interval
+                ia, ib = _terminal_current(c, x, v_a[k - 1], v_b[k - 1])
+            else:
+                ia, ib = _terminal_current(c, x, 0.0, 0.0)
+            out[0, k] = ia
+            out[1, k] = ib
         out[2, k] = x[8] if two else x[6] / p
         if k == n - 1:
             break
@@ -438,6 +446,9 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
             d = _sign(w0)
             dl = _sign(wl0)
             _derivative(c, x, va0, vb0, d, dl, ts, k1)
+            if j == 0 and not own:
+                out[0, k] = k1[N_STATES]
+                out[1, k] = k1[N_STATES + 1]
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k1[s]
             _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2)
@@ -466,7 +477,7 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
 @numba.njit(cache=True, nogil=True)
 def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
     """Rows ``start..stop-1`` of ``rows`` into ``out`` (left NaN for invalid rows); releases the GIL."""
-    work = np.empty((6, N_STATES))
+    work = np.empty((6, N_WORK))
     x0 = np.empty(N_STATES)
     for m in range(start, stop):
         c = rows[m]
@@ -496,5 +507,5 @@ def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
     """One trajectory from state ``x0`` (modified in place to the final state) starting at time
     ``t0`` (s): (3, N)."""
     out = np.empty((3, v_a.shape[0]))
-    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((6, N_STATES)))
+    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((6, N_WORK)))
     return out
