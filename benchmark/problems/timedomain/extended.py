@@ -87,9 +87,12 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
     base_rows,
     valid_rows,
 )
+from benchmark.problems.timedomain.extended_tmode import _t_constants, _t_mode, _t_solve
 from benchmark.problems.timedomain.simulation import run_split, substep_voltages
 
 N_STATES = 12
+#: Length of the stepper's work rows: the states' derivatives, then the stator current (A).
+N_WORK = N_STATES + 2
 SQRT3_2 = math.sqrt(3.0) / 2.0
 
 
@@ -182,55 +185,6 @@ def _resist(direction, drive, tc):
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
-def _t_mode(c):
-    """The row's magnetising branch saturates at a T circuit's node: a split is set, the
-    magnetising curve bends, and the leakage does not saturate (see the module docstring)."""
-    return c[36] > 0.0 and (c[7] != 0.0 or c[23] != 0.0) and c[10] == 0.0
-
-
-@numba.njit(cache=True, _nrt=False)
-def _t_solve(c, x):
-    """T mode: stator and total rotor currents (T units, A) and the referral ``Lm/(Lm + Llr)``."""
-    L_sig, LM, k = c[1], c[2], c[36]
-    ms_k, ms_psi, ms_exp, k2, e2 = c[7], c[8], c[9], c[23], c[24]
-    Ls_tot = L_sig + LM
-    a = (1.0 - k) * LM
-    Lm = 0.5 * (a + math.sqrt(a * a + 4.0 * k * Ls_tot * LM))
-    Lls = Ls_tot - Lm
-    Llr = k * Lls
-    g0 = Lm / (Lm + Llr)
-    pr_a = x[2] / g0
-    pr_b = x[3] / g0
-    A_a = x[0] / Lls + pr_a / Llr
-    A_b = x[1] / Lls + pr_b / Llr
-    A = math.sqrt(A_a * A_a + A_b * A_b)
-    c0 = 1.0 / Lls + 1.0 / Llr
-    m = A / (c0 + 1.0 / Lm)  # the unsaturated solution: an upper bound (s >= 1)
-    for _ in range(30):
-        u = m / ms_psi
-        sat = 1.0
-        dsat = 0.0
-        if ms_k != 0.0:
-            sat += ms_k * u**ms_exp
-            dsat += ms_k * ms_exp * u ** (ms_exp - 1.0) / ms_psi
-        if k2 != 0.0:
-            sat += k2 * u**e2
-            dsat += k2 * e2 * u ** (e2 - 1.0) / ms_psi
-        f = m * (c0 + sat / Lm) - A
-        step = f / (c0 + (sat + m * dsat) / Lm)
-        m -= step
-        if abs(step) <= 1e-13 * (m + 1e-300):
-            break
-    if A > 0.0:
-        pm_a = A_a * m / A
-        pm_b = A_b * m / A
-    else:
-        pm_a = 0.0
-        pm_b = 0.0
-    return (x[0] - pm_a) / Lls, (x[1] - pm_b) / Lls, (pr_a - pm_a) / Llr, (pr_b - pm_b) / Llr, g0
-
-
-@numba.njit(cache=True, _nrt=False, inline="always")
 def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
     """Current (A) of a rotor loop of resistance ``R`` (ohm; 0: absent, no current) and leakage
     ``L`` (H) whose flux linkage (Wb) is ``p`` over the magnetising node's ``pm``; ``gain``
@@ -250,7 +204,7 @@ def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
+def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
     gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
     Ud, i0, h_th, alpha, J, fv, fc, p = c[13], c[14], c[15], c[16], c[17], c[18], c[19], c[20]
@@ -273,7 +227,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
     i2_a, i2_b = _loop_current(R_r2, 1.0, p2_a, p2_b, pm_a, pm_b, Ls2)
     i3_a, i3_b = _loop_current(R_r3, 1.0, p3_a, p3_b, pm_a, pm_b, Ls3)
     if _t_mode(c):
-        is_a, is_b, ir_a, ir_b, g0 = _t_solve(c, x)
+        is_a, is_b, ir_a, ir_b, g0 = _t_solve(c, x, tm)
         # cage 2 and loop 3 on the rotor node, in T units
         i2_a, i2_b = _loop_current(R_r2, g0, p2_a, p2_b, pm_a, pm_b, Ls2)
         i3_a, i3_b = _loop_current(R_r3, g0, p3_a, p3_b, pm_a, pm_b, Ls3)
@@ -315,6 +269,8 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
         out[1] = v_b - Rs_t * is_b
     out[2] = e_a
     out[3] = e_b
+    out[N_STATES] = is_a  # the stator branch current at x, for the stepper's output
+    out[N_STATES + 1] = is_b
     out[4], out[5] = _loop_flux_rate(R_r2, R_r2_t, i2_a, i2_b, w, p2_a, p2_b)
     out[10], out[11] = _loop_flux_rate(R_r3, R_r3_t, i3_a, i3_b, w, p3_a, p3_b)
     t_m = 1.5 * p * (ps_a * is_b - ps_b * is_a)
@@ -356,9 +312,9 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _stator_current(c, x):
+def _stator_current(c, x, tm):
     if _t_mode(c):
-        ia, ib, _, _, _ = _t_solve(c, x)
+        ia, ib, _, _, _ = _t_solve(c, x, tm)
         return ia, ib
     d_a = x[0] - x[2]
     d_b = x[1] - x[3]
@@ -367,9 +323,9 @@ def _stator_current(c, x):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _terminal_current(c, x, v_a, v_b):
+def _terminal_current(c, x, v_a, v_b, tm):
     """Recorded stator current: the branch current plus the stator-side iron-loss current."""
-    ia, ib = _stator_current(c, x)
+    ia, ib = _stator_current(c, x, tm)
     gs = c[34]
     if gs == 0.0:
         return ia, ib
@@ -393,7 +349,7 @@ def _sign(v):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _stick(c, x, w0, wl0, t):
+def _stick(c, x, w0, wl0, t, tm):
     """After a step: a speed that crossed zero against its Coulomb torque sticks at zero."""
     p = c[20]
     fc = c[19]
@@ -401,7 +357,7 @@ def _stick(c, x, w0, wl0, t):
     if two:
         t_pass, t_dyn = _loads(c, t, x[8])
         if fc > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
-            ia2, ib2 = _stator_current(c, x)
+            ia2, ib2 = _stator_current(c, x, tm)
             t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
             t_sh = c[32] * x[9] + c[33] * (x[6] / p - x[8])
             if abs(t_m - t_sh) <= fc:
@@ -414,17 +370,22 @@ def _stick(c, x, w0, wl0, t):
     t_pass, t_dyn = _loads(c, t, 0.0)
     fct = fc + t_pass
     if fct > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
-        ia2, ib2 = _stator_current(c, x)
+        ia2, ib2 = _stator_current(c, x, tm)
         t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
         if abs(t_m) <= fct:
             x[6] = 0.0
 
 
 @numba.njit(cache=True, _nrt=False)
-def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
+def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
     """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s) (the load side's on a
-    two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps)."""
+    two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps).
+    ``work``: (7, N_WORK) scratch; ``warm``: a T-mode row's node flux solved from the last
+    solution (:func:`_t_solve`)."""
     n = v_a.shape[0]
+    tm = work[6]
+    if _t_mode(c):
+        _t_constants(c, tm, warm)
     x = work[0]
     for s in range(N_STATES):
         x[s] = x0[s]
@@ -437,14 +398,18 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
     p = c[20]
     two = c[31] > 0.0
     for k in range(n):
-        if linear:
-            ia, ib = _terminal_current(c, x, v_a[k], v_b[k])
-        elif k > 0:  # a held input: the sample closes the previous interval
-            ia, ib = _terminal_current(c, x, v_a[k - 1], v_b[k - 1])
-        else:
-            ia, ib = _terminal_current(c, x, 0.0, 0.0)
-        out[0, k] = ia
-        out[1, k] = ib
+        # without a stator-side iron loss the recorded current is the stator branch current at
+        # x, which the step's first derivative computes (the same operations): taken from there
+        own = c[34] > 0.0 or k == n - 1
+        if own:
+            if linear:
+                ia, ib = _terminal_current(c, x, v_a[k], v_b[k], tm)
+            elif k > 0:  # a held input: the sample closes the previous interval
+                ia, ib = _terminal_current(c, x, v_a[k - 1], v_b[k - 1], tm)
+            else:
+                ia, ib = _terminal_current(c, x, 0.0, 0.0, tm)
+            out[0, k] = ia
+            out[1, k] = ib
         out[2, k] = x[8] if two else x[6] / p
         if k == n - 1:
             break
@@ -455,19 +420,22 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
             wl0 = x[8]
             d = _sign(w0)
             dl = _sign(wl0)
-            _derivative(c, x, va0, vb0, d, dl, ts, k1)
+            _derivative(c, x, va0, vb0, d, dl, ts, k1, tm)
+            if j == 0 and not own:
+                out[0, k] = k1[N_STATES]
+                out[1, k] = k1[N_STATES + 1]
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k1[s]
-            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2)
+            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2, tm)
             for s in range(N_STATES):
                 xt[s] = x[s] + 0.5 * hs * k2[s]
-            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3)
+            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3, tm)
             for s in range(N_STATES):
                 xt[s] = x[s] + hs * k3[s]
-            _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4)
+            _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4, tm)
             for s in range(N_STATES):
                 x[s] = x[s] + hs / 6.0 * (k1[s] + 2.0 * (k2[s] + k3[s]) + k4[s])
-            _stick(c, x, w0, wl0, ts + hs)
+            _stick(c, x, w0, wl0, ts + hs, tm)
         m = 0.0
         for s in range(N_STATES):
             m = max(m, abs(x[s]))
@@ -484,14 +452,14 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work):
 @numba.njit(cache=True, nogil=True)
 def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
     """Rows ``start..stop-1`` of ``rows`` into ``out`` (left NaN for invalid rows); releases the GIL."""
-    work = np.empty((6, N_STATES))
+    work = np.empty((7, N_WORK))
     x0 = np.empty(N_STATES)
     for m in range(start, stop):
         c = rows[m]
         if not np.isfinite(c[0]):
             continue
         x0[:] = 0.0
-        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0, work)
+        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0, work, True)
 
 
 def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
@@ -514,5 +482,5 @@ def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
     """One trajectory from state ``x0`` (modified in place to the final state) starting at time
     ``t0`` (s): (3, N)."""
     out = np.empty((3, v_a.shape[0]))
-    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((6, N_STATES)))
+    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((7, N_WORK)), False)
     return out

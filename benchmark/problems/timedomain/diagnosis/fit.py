@@ -15,7 +15,7 @@ batched through the kernel), in coordinates normalised to their bounds.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize
@@ -26,8 +26,9 @@ from benchmark.core.uncertainty import hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.engine import quiet
 from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
+from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
 from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
-from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch, valid_rows
+from benchmark.problems.timedomain.extended import IDX, base_rows, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
 from benchmark.problems.timedomain.simulation import hold_is_linear
@@ -64,6 +65,10 @@ class DiagnosisData:
     input_hold: str
     supply_frequency: float
     current_used: np.ndarray | None = None  # (N,) False where the conditioning masked a current sample
+    kernel: KernelCache = field(init=False, repr=False, compare=False)  # the model's outputs of this input
+
+    def __post_init__(self):
+        self.kernel = KernelCache(self.v_alpha, self.v_beta, self.linear, self.sample_time)
 
     @classmethod
     def from_dataset(cls, ds: StartupDataset) -> DiagnosisData:
@@ -231,8 +236,12 @@ class JointModel:
         """Model outputs in the residual layout, (n, n_residuals)."""
         X = np.atleast_2d(X)
         rows = self.rows(X)
+        return self.outputs(X, rows, self.data.kernel.simulate(rows))
+
+    def outputs(self, X: np.ndarray, rows: np.ndarray, sim: np.ndarray) -> np.ndarray:
+        """Model outputs in the residual layout (n, n_residuals) from the extended model's
+        outputs ``sim`` (n, 3, N) of ``rows = self.rows(X)``: the sensors' transforms, the stop."""
         d = self.data
-        sim = simulate_extended_batch(rows, d.v_alpha, d.v_beta, d.linear, d.sample_time, 1)
         for eff, s in self._measure_order:
             measure = getattr(eff, "measure", None)
             if measure is not None:
@@ -297,8 +306,13 @@ class JointModel:
         return FreeCoast(d.stop_t, J, fv, A, C)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
+        return self.residuals_of(self.simulate(X))
+
+    def residuals_of(self, outputs: np.ndarray) -> np.ndarray:
+        """Noise-normalised residuals (n, n_residuals) of model outputs (:meth:`simulate`), a
+        diverged output :data:`DIVERGED`."""
         with np.errstate(all="ignore"):
-            r = (self.measured[None, :] - self.simulate(X)) * self.weight[None, :]
+            r = (self.measured[None, :] - outputs) * self.weight[None, :]
         return np.where(np.isfinite(r), r, DIVERGED)
 
     def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_iterations: int = 12,

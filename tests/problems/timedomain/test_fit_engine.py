@@ -1,0 +1,133 @@
+"""The diagnosis's fitting engine: fits side by side give what they give alone, each distinct
+kernel row is simulated once, the free coast's closed form, and the linearised score tests."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from benchmark.core.effects import load_effects
+from benchmark.problems.timedomain.diagnosis import engine
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
+from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
+from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
+from benchmark.problems.timedomain.diagnosis.pipeline import base_context, friction_scale
+from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
+from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch
+from benchmark.problems.timedomain.simulation import serial_kernels
+from tests.conftest import PAPER_MOTOR, compose_config
+
+EFFECTS = load_effects("timedomain")
+TRUE = {k: getattr(PAPER_MOTOR, k) for k in ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")}
+
+
+@pytest.fixture(scope="module")
+def offset_record():
+    """A 0.2 s six-step start with a 3 s stop and voltage/current offsets (noisy), ready for the fits."""
+    from synthetic.timedomain import make_dataset
+
+    cfg = compose_config(["noise=noisy", "motor.test.cycles=10", "motor.test.stop_duration=3",
+                          "effects=[sensor_offset]", "+effect_size.sensor_offset=4.0"], name="diagnose")
+    ds, _ = make_dataset(cfg)
+    data = DiagnosisData.from_dataset(ds)
+    ctx = base_context(data, TRUE, ds.dc_link_voltage)
+    return data, ctx, friction_scale(TRUE, ctx)
+
+
+def test_side_by_side_keeps_order_runs_on_workers_and_nests_in_place(monkeypatch):
+    monkeypatch.setenv("IMBENCH_FIT_WORKERS", "2")
+    names = engine.side_by_side(lambda k: (k, threading.current_thread().name, engine.in_worker()), range(5))
+    assert [n[0] for n in names] == list(range(5))
+    assert all(n[1].startswith("imbench-fit") and n[2] for n in names)
+    inner = engine.side_by_side(lambda k: engine.side_by_side(lambda j: threading.current_thread().name, (k, k)),
+                                (0, 1))
+    assert all(a == b for a, b in inner)  # a nested map stays in its worker's thread
+    with pytest.raises(ZeroDivisionError):
+        engine.side_by_side(lambda k: 1 / k, (1, 0, 2))
+
+
+def test_kernel_cache_gives_the_kernels_outputs_and_simulates_each_row_once(offset_record):
+    data = offset_record[0]
+    rows = base_rows(np.array([[TRUE[k] for k in ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")]] * 3), 1)
+    rows[1, IDX["Rs"]] *= 1.01
+    rows[2, IDX["J_l"]], rows[2, IDX["k_sh"]] = 0.003, 200.0  # a two-mass row
+    batch = rows[[0, 1, 0, 2, 1]]
+    batch[4] = np.nan  # an invalid row
+    direct = simulate_extended_batch(batch, data.v_alpha, data.v_beta, data.linear, data.sample_time, 1)
+    cache = KernelCache(data.v_alpha, data.v_beta, data.linear, data.sample_time, size=2)
+    np.testing.assert_array_equal(cache.simulate(batch), direct)
+    assert (cache.requested, cache.simulated) == (5, 4)
+    np.testing.assert_array_equal(cache.simulate(batch[[3, 4]]), direct[[3, 4]])  # the last two kept
+    assert cache.simulated == 4
+    with serial_kernels():  # one thread or several: the same rows, the same outputs
+        one = simulate_extended_batch(batch, data.v_alpha, data.v_beta, data.linear, data.sample_time, 1)
+    np.testing.assert_array_equal(one, direct)
+
+
+def _at_rest_from_first_stop(w):
+    down = ~(w > 0)
+    if down.any():
+        w[np.argmax(down):] = 0.0
+    return w
+
+
+def test_free_coast_is_the_closed_form_of_the_coast():
+    """Against the closed forms written out here: exponential decay to the Coulomb offset, and
+    with a fan load the tangent form; the shaft at rest once stopped."""
+    t = np.linspace(0.0, 30.0, 3001)
+    J, fv = np.array([[0.0064], [0.0064]]), np.array([[3e-4], [3e-4]])
+    A, C = np.array([[0.04], [0.04]]), np.array([[0.0], [2e-6]])
+    w = FreeCoast(t, J, fv, A, C).speed(np.array([[300.0], [300.0]]))
+    tau, c = J[0, 0] / fv[0, 0], A[0, 0] / J[0, 0]
+    expo = _at_rest_from_first_stop((300.0 + tau * c) * np.exp(-t / tau) - tau * c)
+    np.testing.assert_allclose(w[0], expo, rtol=1e-13, atol=1e-12)
+    q = np.sqrt(4 * A[1, 0] * C[1, 0] - fv[1, 0] ** 2)
+    phi0 = np.arctan((2 * C[1, 0] * 300.0 + fv[1, 0]) / q)
+    fan = _at_rest_from_first_stop((-fv[1, 0] + q * np.tan(phi0 - q * t / (2 * J[1, 0]))) / (2 * C[1, 0]))
+    np.testing.assert_allclose(w[1], fan, rtol=1e-10, atol=1e-9)
+    stops = [int(np.argmax(row == 0)) for row in w]
+    assert 0 < stops[1] < stops[0] < len(t) - 1  # both stop inside the record, the fan-loaded one sooner
+
+
+def test_fits_side_by_side_equal_the_fits_one_after_the_other(offset_record, monkeypatch):
+    data, ctx, fcs = offset_record
+    a, b = data.folds()
+    models = [JointModel(data, 2, effects, ctx, TRUE, fcs) for effects in ([], [EFFECTS["sensor_offset"]])]
+    jobs = [(m, mask) for m in models for mask in (a, b)]
+
+    def fit(job):
+        m, mask = job
+        x0 = np.concatenate([[TRUE[n] * 1.05 for n in m.base_names]] + [e.extra_starts(ctx)[0] for e in m.effects])
+        return m.fit(x0, mask, 3)
+
+    monkeypatch.setenv("IMBENCH_FIT_WORKERS", "1")
+    alone = [fit(j) for j in jobs]
+    monkeypatch.setenv("IMBENCH_FIT_WORKERS", "2")
+    together = engine.side_by_side(fit, jobs)
+    for x, y in zip(alone, together, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_score_tests_rank_the_injected_effect_first_and_predict_the_fits(offset_record):
+    """The record's offsets: sensor_offset leads the candidates with most of the gap a base fit
+    leaves; the predicted held-out chi^2 of the leader, and of a heating (which takes part of an
+    offset's DC signature into the resistances), are those of their fits (fold A, scored on B)
+    to a tenth of the gap."""
+    data, ctx, fcs = offset_record
+    a, b = data.folds()
+    base = JointModel(data, 2, [], ctx, TRUE, fcs)
+    x_a = base.fit(np.array([TRUE[n] for n in base.base_names]), a, 8)
+    held = float(np.mean(base.residuals(x_a[None])[0][b] ** 2))
+    names = ("sensor_offset", "iron_loss", "temperature_drift", "double_cage")
+    rows = score_tests(lambda effs: JointModel(data, 2, effs, ctx, TRUE, fcs), [], x_a, a, b,
+                       [(EFFECTS[n],) for n in names], ctx)
+    assert rows[0]["effect"] == "sensor_offset", rows
+    assert held > 10.0 and rows[0]["predicted_drop"] > 0.8 * (held - 1.0), (held, rows[0])
+    for name in ("sensor_offset", "temperature_drift"):
+        m = JointModel(data, 2, [EFFECTS[name]], ctx, TRUE, fcs)
+        x = m.fit(np.concatenate([x_a, EFFECTS[name].extra_starts(ctx)[0]]), a, 12)
+        fitted = float(np.mean(m.residuals(x[None])[0][b] ** 2))
+        predicted = next(r["predicted_heldout_chi2"] for r in rows if r["effect"] == name)
+        assert abs(predicted - fitted) < 0.1 * held, (name, predicted, fitted, held)
