@@ -25,6 +25,7 @@ from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.core.uncertainty import hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.engine import quiet
+from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
 from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
 from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
@@ -155,6 +156,11 @@ class DiagnosisData:
         if self.stop_t is not None:
             parts.append(np.ones(len(self.stop_t), bool))
         return np.concatenate(parts)
+
+    def folds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The diagnosis's two held-out folds, cut by segment of the experiment
+        (:func:`.folds.segment_folds`)."""
+        return segment_folds(self)
 
     def facts(self, base_case: int) -> dict:
         """What the experiment says about itself: which effects can occur in it."""
