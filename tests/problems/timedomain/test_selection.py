@@ -46,9 +46,14 @@ class _Given(Selector):
             chi2 = self.held[names] = min(chi2, self.refits.get(names, chi2))
         return _fit(chi2, effects)
 
-    def screen_pair(self, cur, a, b, singles):
-        key = frozenset(cur.names + [a.name, b.name])
-        return self.screened.get(key, self.held[key])
+    def screen_pairs(self, pool, singles):
+        cur = next(iter(singles.values())).names[:-1]
+        out = {}
+        for i, a in enumerate(pool):
+            for b in pool[i + 1:]:
+                key = frozenset(cur + [a.name, b.name])
+                out[frozenset((a.name, b.name))] = self.screened.get(key, self.held[key])
+        return out
 
     def fold_b(self, sf):
         return sf.chi2

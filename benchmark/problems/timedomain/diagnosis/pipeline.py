@@ -84,7 +84,8 @@ class DiagnosisSettings:
     max_iterations : safety cap of each local fit's function evaluations; fits stop at
         convergence (an iteration that changes the whitened SSR by less than 1e-5 of itself, or
         the parameters by 1e-5 of their box) long before it.
-    screen_iterations : iterations of the short fits that screen pairs (fold A, scored on fold B).
+    screen_iterations : every start of a fit runs this many evaluations; the one that ends lowest goes on
+        to convergence.
     max_effects : at most this many effects are named (None: no cap; 0: the base's gap only).
     voltage_noise : with measured continuous voltages (``input_hold: linear``), each channel's
         noise level includes the voltage's noise carried through the model (:mod:`.input_noise`).

@@ -1,27 +1,29 @@
-"""Choosing the effects (step 5 of :mod:`.pipeline`): fold fits of effect sets, the forward
+"""Choosing the effects (step 6 of :mod:`.pipeline`): fold fits of effect sets, the forward
 selection with its pair step, and the backward check, all decided by :class:`.rule.Rule`.
 
 **Fits.** A set of effects is fitted on each fold (base parameters and the set's extras) from
 several starts: the set it grew from or shrank from (its fitted parameters, the new effect's own
 starting values, the starts that move part of the base into it, an instant chosen on a grid),
 and for a drop-one model also the base identification's point with the other effects' fitted
-extras (not only parameters co-adapted to the effect that was dropped). Every start is fitted to
-convergence (``DiagnosisSettings.max_iterations`` is a safety cap), the best on the fold's own
-samples is kept, then each fold is refitted from the other fold's point where that point fits
-it better (:meth:`Selector.cross_start`: both folds minimise the same model's residuals, and a
-fold left in a worse basin would charge its misfit to the model).
+extras (not only parameters co-adapted to the effect that was dropped). Every start is fitted
+briefly (``DiagnosisSettings.screen_iterations``), the one that ends lowest on the fold's own
+samples on to convergence (``max_iterations`` is a safety cap); then each fold is refitted from
+the other fold's point where that point fits it better (:meth:`Selector.cross_start`: both
+folds minimise the same model's residuals, and a fold left in a worse basin would charge its
+misfit to the model).
 
 Fits are kept by set (:attr:`Selector.memo`): a set reached again starts from its earlier fit
 too and keeps the better, so that a set's score does not hang on the path that reached it.
 
 **Decisions** (:mod:`.rule`): forward, every remaining candidate is fitted with the current set
 and the lowest held-out chi^2 enters when it earns its place; when none does, a pair enters when
-each of its two effects earns its place beside the other. Pairs are screened first (a short fit
-on fold A from the two single fits, ``DiagnosisSettings.screen_iterations``, scored on fold B)
-and fitted fully, best screened first, while the screening says they may earn. Backward, every
-chosen effect must earn its place beside the others (each drop-one model refitted from several
-starts); the least needed effect that does not is dropped (``pruned``) and the check repeats; a
-dropped effect leaves the candidates and the forward selection resumes.
+each of its two effects earns its place beside the other. Pairs are screened first by linearised
+score tests (:mod:`.score_tests`: one effect added to the other's single fit on fold A, a
+Gauss-Newton step scored on fold B) and fitted fully, best screened first, where the screening
+says both may earn. Backward, every chosen effect must earn its place beside the others (each
+drop-one model refitted from several starts); the least needed effect that does not is dropped
+(``pruned``) and the check repeats; a dropped effect leaves the candidates and the forward
+selection resumes.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from benchmark.core.effects import Effect
 from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 from benchmark.problems.timedomain.diagnosis.rule import Rule, score_difference, share_removed
+from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 
 FOLDS = ("A", "B")
 
@@ -125,14 +128,13 @@ class Selector:
         return sf
 
     def best(self, model: JointModel, starts, mask) -> np.ndarray:
-        """The fit (to convergence) of the start that ends lowest on ``mask``'s samples."""
-        best, best_ssr = None, np.inf
-        for x0 in _distinct(starts):
-            x = model.fit(x0, mask, self.settings.max_iterations)
-            s = model.ssr(x, mask)
-            if best is None or s < best_ssr:
-                best, best_ssr = x, s
-        return best
+        """Every start fitted briefly (``screen_iterations``); the one that ends lowest on
+        ``mask``'s samples fitted on to convergence."""
+        starts = _distinct(starts)
+        if len(starts) > 1:
+            legs = [model.fit(x0, mask, self.settings.screen_iterations) for x0 in starts]
+            starts = [min(legs, key=lambda x: model.ssr(x, mask))]
+        return model.fit(starts[0], mask, self.settings.max_iterations)
 
     def composed(self, model: JointModel, base_from: SetFit, extras_from, fold: str) -> list[np.ndarray]:
         """Starts of ``model`` on ``fold``: ``base_from``'s base parameters, each effect's extras
@@ -287,10 +289,13 @@ class Selector:
 
         pairs = list(itertools.combinations(pool, 2))
         if progress:
-            progress(f"screening {len(pairs)} pairs beside {' + '.join(cur.names) or 'the base'}")
-        chi2s = side_by_side(lambda ab: self.screen_pair(cur, ab[0], ab[1], singles), pairs)
-        screened = [{"effect": f"{a.name}+{b.name}", "heldout_chi2_fold_B": chi2, "may_earn": chi2 <= target(a, b),
-                     "pair": (a, b)} for (a, b), chi2 in zip(pairs, chi2s, strict=True)]
+            progress(f"score tests of {len(pairs)} pairs beside {' + '.join(cur.names) or 'the base'}")
+        predicted = self.screen_pairs(pool, singles)
+        screened = []
+        for a, b in pairs:
+            chi2 = predicted[frozenset((a.name, b.name))]
+            screened.append({"effect": f"{a.name}+{b.name}", "heldout_chi2_fold_B": chi2,
+                             "may_earn": chi2 <= target(a, b), "pair": (a, b)})
         screened.sort(key=lambda r: r["heldout_chi2_fold_B"])
         rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": cur.names, "pairs": True,
                "screening": [{k: v for k, v in r.items() if k != "pair"} for r in screened],
@@ -319,16 +324,26 @@ class Selector:
         """Fold B's held-out chi^2 of ``sf`` (fold B predicted by the fit on fold A)."""
         return float(np.mean(sf.held[self.masks["B"]] ** 2))
 
-    def screen_pair(self, cur: SetFit, a: Effect, b: Effect, singles: dict) -> float:
-        """Fold B's held-out chi^2 of ``cur`` plus ``a`` and ``b`` fitted briefly on fold A
-        (``screen_iterations``) from each of the two single fits, the better kept."""
-        model = self.model(cur.effects + [a, b])
-        mask_a = self.masks["A"]
-        starts = (self.composed(model, singles[a.name], [singles[a.name]], "A")
-                  + self.composed(model, singles[b.name], [singles[b.name]], "A"))
-        x = min((model.fit(x0, mask_a, self.settings.screen_iterations) for x0 in _distinct(starts)),
-                key=lambda x: model.ssr(x, mask_a))
-        return float(np.mean(model.residuals(x[None, :])[0][self.masks["B"]] ** 2))
+    def screen_pairs(self, pool, singles: dict) -> dict[frozenset, float]:
+        """Fold B's held-out chi^2 each pair of ``pool`` is predicted to reach: the linearised
+        score test (:func:`.score_tests.score_tests`) of adding ``b`` to the single fit of the
+        current set plus ``a`` (on fold A; the masking partner's signature shows once ``a`` is
+        in), the better of the two orders."""
+        def make(effects):  # the parameters in the order given: the fitted set's, then the new effect's
+            return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
+                              self.settings.base_span)
+
+        def given(a):
+            sa = singles[a.name]
+            rows = score_tests(make, sa.effects, sa.xs["A"], self.masks["A"], self.masks["B"],
+                               [(b,) for b in pool if b is not a], self.ctx)
+            return {frozenset((a.name, r["effect"])): r["predicted_heldout_chi2"] for r in rows}
+
+        out: dict[frozenset, float] = {}
+        for part in side_by_side(given, pool):
+            for key, chi2 in part.items():
+                out[key] = min(chi2, out.get(key, np.inf))
+        return out
 
     def backward(self, cur: SetFit, base_fit: SetFit, band: float, progress=None):
         """The backward check (module docstring). Returns (the set kept, each kept effect's
