@@ -356,7 +356,10 @@ class JointModel:
         with np.errstate(all="ignore"):
             np.subtract(self.measured[None, :], r, out=r)
             r *= self.weight[None, :]
-        return np.nan_to_num(r, copy=False, nan=DIVERGED, posinf=DIVERGED, neginf=DIVERGED)
+        bad = ~np.isfinite(r)
+        if bad.any():
+            r[bad] = DIVERGED
+        return r
 
     def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_iterations: int = 12,
             tol: float = 1e-5) -> np.ndarray:
