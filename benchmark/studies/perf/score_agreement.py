@@ -27,6 +27,15 @@ from benchmark.problems.timedomain.diagnosis import selection
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 
 
+def screening_starts(selector, chosen):
+    """The screening's starts of an addition (``Selector.starts_with(..., every=False)``, then
+    ``Selector.profiled`` on fold A), as :func:`score_tests` takes them."""
+    def starts(model, x, new):
+        return selector.profiled(model, selector.starts_with(model, x, new, every=False), selector.masks["A"],
+                                 range(len(chosen), len(model.effects)))
+    return starts
+
+
 def instrument(log: list) -> None:
     """Wrap :meth:`Selector.prescreen` so that each screening also runs the score tests."""
     original = selection.Selector.prescreen
@@ -34,7 +43,7 @@ def instrument(log: list) -> None:
     def prescreen(self, chosen, additions, cur, progress=None):
         t0 = time.process_time()
         scored = score_tests(self.model, list(chosen), cur.xs["A"], self.masks["A"], self.masks["B"], additions,
-                             self.ctx)
+                             self.ctx, screening_starts(self, chosen))
         t_score = time.process_time() - t0
         t0 = time.process_time()
         kept, table = original(self, chosen, additions, cur, progress)

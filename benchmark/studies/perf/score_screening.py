@@ -23,7 +23,7 @@ import numpy as np
 from benchmark.problems.timedomain.diagnosis import selection
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 from benchmark.studies.perf.diagnosis_runs import summary
-from benchmark.studies.perf.score_agreement import _diagnose
+from benchmark.studies.perf.score_agreement import _diagnose, screening_starts
 
 
 def prescreen_by_score_tests(self, chosen, additions, cur, progress=None):
@@ -31,7 +31,7 @@ def prescreen_by_score_tests(self, chosen, additions, cur, progress=None):
     if progress:
         progress("score tests " + " + ".join(e.name for e in chosen))
     rows = score_tests(self.model, list(chosen), cur.xs["A"], self.masks["A"], self.masks["B"], additions,
-                       self.ctx)
+                       self.ctx, screening_starts(self, chosen))
     by_name = {"+".join(e.name for e in a): a for a in additions}
     held_cur = float(np.mean(cur.held[self.masks["B"]] ** 2))
     table = [{"effect": r["effect"], "heldout_chi2_fold_B": r["predicted_heldout_chi2"],

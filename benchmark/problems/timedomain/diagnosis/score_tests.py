@@ -4,8 +4,8 @@ For every addition (one effect, or a pair for the look-ahead) to the current mod
 augmented model is linearised at the current fit on one fold with the new effects at their
 starting point (:func:`start_extras`: the point the screening fits start from; where an
 effect's neutral value lies inside its box, e.g. a load torque or a heating of 0, that is its
-first start; an instant on the effect's start grid is set to the grid value that fits best,
-as the screening's starts are, and held there), by forward differences in the fits'
+first start; or the screening's own starts, given by the caller; an instant on an effect's
+start grid is held), by forward differences in the fits'
 coordinates (each parameter normalised to its box, as :meth:`JointModel.fit` does). One
 Gauss-Newton step of all parameters (base, chosen and new), bounded to the box
 (:func:`scipy.optimize.lsq_linear`), is fitted to that fold's residuals. Its linear prediction
@@ -41,45 +41,21 @@ def start_extras(eff: Effect, ctx: EffectContext) -> np.ndarray:
     return np.asarray(eff.extra_starts(ctx)[0], float)
 
 
-def start_points(model: JointModel, x_fit: np.ndarray, add: tuple[Effect, ...], ctx: EffectContext) -> list:
-    """The linearisation points of an addition: the current fit with the new effects' first
-    starts, then for each new effect the starts that move part of the base into it
-    (:meth:`Effect.starts_from_base`, e.g. a Coulomb friction that holds a load step), as the
-    screening's starts are."""
-    x0 = np.concatenate([np.asarray(x_fit, float)] + [start_extras(e, ctx) for e in add])
-    points = [x0]
-    k_base = len(model.base_names)
-    base = dict(zip(model.base_names, map(float, x0[:k_base]), strict=True))
-    first_new = len(model.effects) - len(add)
-    for j, eff in enumerate(add):
-        for setting, extras in eff.starts_from_base(base, ctx):
-            x = x0.copy()
-            for name, value in setting.items():
-                if name in model.base_names:
-                    x[model.base_names.index(name)] = value
-            x[model.slices[first_new + j]] = extras
-            points.append(np.clip(x, model.lower, model.upper))
-    return points
+def first_starts(model: JointModel, x_fit: np.ndarray, new: Sequence[Effect], ctx: EffectContext) -> list:
+    """The default linearisation point of an addition: the current fit with the new effects'
+    first starts (:func:`start_extras`)."""
+    return [np.concatenate([np.asarray(x_fit, float)] + [start_extras(e, ctx) for e in new])]
 
 
-def _on_grid(model: JointModel, x0: np.ndarray, new_from: int, fit_mask: np.ndarray, ctx: EffectContext):
-    """``x0`` with the grid parameter of each new effect (``model.effects[new_from:]``) that has
-    one (:meth:`Effect.start_grid`: an instant a local step cannot find from afar) set to the
-    grid value that fits ``fit_mask`` best, all values evaluated in one batch (``x0`` itself
-    wins ties); and the indices of those parameters (held in the step)."""
-    x, held = np.asarray(x0, float), []
+def _grid_columns(model: JointModel, new_from: int, ctx: EffectContext) -> list[int]:
+    """Indices of the new effects' grid parameters (:meth:`Effect.start_grid`: instants a local
+    step cannot move well), held in the step."""
+    cols = []
     for j in range(new_from, len(model.effects)):
         grid = model.effects[j].start_grid(ctx)
-        if grid is None:
-            continue
-        col = model.slices[j].start + grid[0]
-        X = np.repeat(x[None, :], len(grid[1]) + 1, axis=0)
-        X[1:, col] = grid[1]
-        X = np.clip(X, model.lower, model.upper)
-        ssr = np.sum(model.residuals(X)[:, fit_mask] ** 2, axis=1)
-        x = X[int(np.argmin(ssr))]
-        held.append(col)
-    return x, held
+        if grid is not None:
+            cols.append(model.slices[j].start + grid[0])
+    return cols
 
 
 def _to_x(model: JointModel, U: np.ndarray) -> np.ndarray:
@@ -108,7 +84,7 @@ def _step(J: np.ndarray, r0: np.ndarray, u0: np.ndarray, held: list[int], fit_ma
 
 def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequence[Effect], x_fit: np.ndarray,
                 fit_mask: np.ndarray, held_mask: np.ndarray, additions: Sequence[tuple[Effect, ...]],
-                ctx: EffectContext) -> list[dict]:
+                ctx: EffectContext, starts: Callable | None = None) -> list[dict]:
     """Score tests of ``additions`` (tuples of effects) to the model ``make_model(chosen)``
     fitted at ``x_fit`` on ``fit_mask``, scored on ``held_mask`` (residual masks). Returns one
     row per addition, best first (lowest ``heldout_chi2``): ``effect`` (names joined by ``+``);
@@ -116,13 +92,21 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
     own held-out chi^2 per residual after the step, or after half or a quarter of it where that
     fits ``fit_mask`` better: a linear prediction can be far off where the effect is far from
     linear at its start); ``drop`` (the reference's ``heldout_chi2`` less the addition's);
-    ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates)."""
+    ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates).
+
+    ``starts(model, x_fit, new)``: the linearisation points of an addition (each is tried, the
+    one that fits ``fit_mask`` best after its step kept), e.g. the screening's own starts
+    (``Selector.starts_with(..., every=False)``, then ``Selector.profiled``: the first starts and
+    those that move part of the base into an effect, such as a Coulomb friction that holds a
+    load step, with a start grid's instant set to its best value); by default
+    :func:`first_starts`. A new effect's grid parameter is held in the step."""
     todo = [()] + [tuple(a) for a in additions]
     plans = []
     for i, add in enumerate(todo):
         model = make_model(list(chosen) + list(add))
-        for x0 in start_points(model, x_fit, add, ctx):
-            x0, held = _on_grid(model, x0, len(chosen), fit_mask, ctx)
+        points = starts(model, x_fit, list(add)) if starts and add else first_starts(model, x_fit, add, ctx)
+        held = _grid_columns(model, len(chosen), ctx)
+        for x0 in points:
             u0, h, X = _linearisation(model, x0)
             plans.append([i, add, model, u0, h, X, model.rows(X), held])
     lin = plans[0][2].data.kernel.simulate(np.vstack([p[6] for p in plans]))
