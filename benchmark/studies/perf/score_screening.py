@@ -34,7 +34,7 @@ def prescreen_by_score_tests(self, chosen, additions, cur, progress=None):
                        self.ctx, screening_starts(self, chosen))
     by_name = {"+".join(e.name for e in a): a for a in additions}
     held_cur = float(np.mean(cur.held[self.masks["B"]] ** 2))
-    table = [{"effect": r["effect"], "heldout_chi2_fold_B": r["predicted_heldout_chi2"],
+    table = [{"effect": r["effect"], "heldout_chi2_fold_B": r["score"],
               "heldout_chi2_base_fold_B": held_cur} for r in rows]
     return [by_name[r["effect"]] for r in rows], table
 

@@ -10,11 +10,10 @@ coordinates (each parameter normalised to its box, as :meth:`JointModel.fit` doe
 Gauss-Newton step of all parameters (base, chosen and new), bounded to the box
 (:func:`scipy.optimize.lsq_linear`), is fitted to that fold's residuals. Its linear prediction
 of the other fold is ``predicted_heldout_chi2``; the model evaluated after the step (or half or
-a quarter of it, whichever fits the fitted fold best: a linearisation can be far off where an
-effect is far from linear at its start) gives ``heldout_chi2``, which ranks the additions. The
-same for the current model alone is the reference, so that what the base's own unfinished
-convergence would gain is not credited to an effect: ``drop`` is the reference's
-``heldout_chi2`` less the addition's.
+a quarter of it, whichever fits the fitted fold best) gives ``heldout_chi2``; the lower of the
+two ranks the additions (``score``). The same for the current model alone is the reference, so
+that what the base's own unfinished convergence would gain is not credited to an effect:
+``drop`` is the reference's score less the addition's.
 
 Cost: a batch of ``k + 1`` rows per addition (``k`` its parameters) and three after the step,
 every addition's rows simulated in one kernel call (:class:`.kernel_cache.KernelCache`), and a
@@ -87,11 +86,13 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
                 ctx: EffectContext, starts: Callable | None = None) -> list[dict]:
     """Score tests of ``additions`` (tuples of effects) to the model ``make_model(chosen)``
     fitted at ``x_fit`` on ``fit_mask``, scored on ``held_mask`` (residual masks). Returns one
-    row per addition, best first (lowest ``heldout_chi2``): ``effect`` (names joined by ``+``);
+    row per addition, best first (lowest ``score``): ``effect`` (names joined by ``+``);
     ``predicted_heldout_chi2`` (the step's linear prediction) and ``heldout_chi2`` (the model's
     own held-out chi^2 per residual after the step, or after half or a quarter of it where that
-    fits ``fit_mask`` better: a linear prediction can be far off where the effect is far from
-    linear at its start); ``drop`` (the reference's ``heldout_chi2`` less the addition's);
+    fits ``fit_mask`` better); ``score``, the lower of the two (each fails on its own: the linear
+    prediction where an effect is far from linear at its start, a load step's size beside its
+    instant; the step where it overshoots a curved valley, a probe's level and sharpness);
+    ``drop`` (the reference's ``score`` less the addition's);
     ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates).
 
     ``starts(model, x_fit, new)``: the linearisation points of an addition (each is tried, the
@@ -134,11 +135,12 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
         best = int(np.argmin(ssr))
         row["heldout_chi2"] = float(np.mean(R[best][held_mask] ** 2))
         row["step_fraction"] = ([0.0] + list(STEP_FRACTIONS))[best]
+        row["score"] = min(row["heldout_chi2"], row["predicted_heldout_chi2"])
         row["_ssr"] = float(ssr[best])
         if plan[0] not in best_of or row["_ssr"] < best_of[plan[0]]["_ssr"]:  # an addition's best start
             best_of[plan[0]] = row
     out = [best_of[i] for i in range(len(todo))]
     for row in out:
         row.pop("_ssr")
-        row["drop"] = out[0]["heldout_chi2"] - row["heldout_chi2"]
-    return sorted(out[1:], key=lambda r: r["heldout_chi2"])
+        row["drop"] = out[0]["score"] - row["score"]
+    return sorted(out[1:], key=lambda r: r["score"])
