@@ -1,75 +1,16 @@
 """The extended induction-motor model: the base model plus the unmodelled effects.
 
 It is the physics behind both the synthetic plant that makes "real" data with an effect and
-the augmented identification models of the sim-to-real diagnosis. With
-every effect term at its neutral value it is the base model of :mod:`benchmark.problems.timedomain.motor`
-written in the inverse-Gamma form (``L_sigma = Le``, ``L_M = Ls - Le``,
-``R_R = Rr (Ls - Le)/Ls``), so the two agree to rounding (tested).
+the augmented identification models of the sim-to-real diagnosis. With every effect term at its
+neutral value it is the base model of :mod:`benchmark.problems.timedomain.motor` written in the
+inverse-Gamma form (``L_sigma = Le``, ``L_M = Ls - Le``, ``R_R = Rr (Ls - Le)/Ls``), so the two
+agree to rounding (tested). The states, branches, effect terms and the T mode are described in
+``docs/extended_model.md``; the row format (one float row per parameter set, every effect's
+fields) in :mod:`benchmark.problems.timedomain.extended_rows`.
 
-States (stator frame, amplitude-invariant, SI): stator flux ``psi_s`` (2), magnetising flux
-``psi_M`` (2), flux of the second rotor branch ``psi_2`` (2), electrical speed ``w``, winding
-temperature rise ``theta`` (K), load-side speed ``w_l`` (mechanical rad/s) and coupling
-twist (rad) of a two-mass shaft, flux of the third rotor branch ``psi_3`` (2).
-
-Branches on the magnetising node (KCL ``i_M(psi_M) = i_s + i_1 + i_2 + i_3 + i_fe``):
-
-* stator: ``d psi_s/dt = v - v_drop(i_s) - Rs(theta) i_s``,
-  ``i_s = (psi_s - psi_M)/L_sigma * (1 + ls_k (|psi_s - psi_M|/ls_psi)^ls_exp)`` (leakage saturation);
-* magnetising: ``i_M = psi_M/L_M * (1 + ms_k (|psi_M|/ms_psi)^ms_exp)`` (main saturation);
-* rotor cage 1 (no leakage): ``0 = R_r1 i_1 + e - j w psi_M`` with ``e = d psi_M/dt``;
-* rotor cage 2 (double cage / deep bar): ``d psi_2/dt = -R_r2 i_2 + j w psi_2``,
-  ``i_2 = (psi_2 - psi_M)/L_sigma2`` (absent when ``R_r2 = 0``);
-* rotor loop 3 (``R_r3``, ``L_sigma3``), the same equations as cage 2: three parallel loops
-  make the impedance of a deep bar (a distributed ladder) to a small fraction of a per cent,
-  where two loops leave some tenths of a per cent, several times the current noise of a start;
-* iron: a stationary loss conductance ``g_fe`` on the node: ``i_fe = -g_fe e``.
-
-So ``e = (i_s + i_2 + i_3 + j w psi_M/R_r1 - i_M)/(1/R_r1 + g_fe)``. Torque
-``T = 1.5 p (psi_s x i_s)``; mechanics as in the base model (viscous ``fv``, Coulomb ``fc``
-with stiction). Resistances follow the copper law ``R (1 + alpha theta)``, with the
-temperature rise driven by the copper losses: ``d theta/dt = h_th * P_cu`` (``h_th`` = 1/heat
-capacity, K/J); the rotor's rise is ``(1 + th_rotor) theta`` (a rotor cage of smaller heat
-capacity, or holding more of the start's losses, rises faster than the stator winding).
-Inverter drop: each phase loses ``U_d tanh(i_x/i_0)`` (``i_0 = 0``: a hard sign), transformed
-to alpha-beta.
-
-Bench effects (appended fields, all neutral at zero):
-
-* voltage-channel offsets ``v_off_a, v_off_b`` (V): the recorded voltage carries a DC offset,
-  so the motor sees ``v - v_off``;
-* magnetising curve: a second power term, ``i_M = psi_M/L_M (1 + ms_k x^ms_exp + ms_k2
-  x^ms_exp2)`` with ``x = |psi_M|/ms_psi`` (non-negative weights: a monotone curve);
-* T mode (``t_split > 0``, with main saturation): the saturating magnetising branch sits at the
-  node of a T circuit whose leakage splits ``Llr = t_split Lls``, the unsaturated T circuit
-  being the row's inverse-Gamma one (``Lls + Lm = L_sigma + L_M``, ``L_M = Lm^2/(Lm + Llr)``,
-  ``R_R = Rr (Lm/(Lm + Llr))^2``). A saturating T circuit has no constant-parameter
-  inverse-Gamma equivalent: the currents now split at that node (solved per evaluation:
-  ``|psi_m| (1/Lls + 1/Llr + s(|psi_m|)/Lm) = |psi_s/Lls + psi_r/Llr|``, Newton). States keep
-  their inverse-Gamma scaling (``psi_M = psi_r Lm/(Lm + Llr)``); the rotor-node iron loss
-  ``g_fe`` is not modelled in T mode (the stator-side ``g_fe_s`` is); with a saturating leakage
-  (``ls_k > 0``) the row stays in the inverse-Gamma mode, the magnetising curve at the rotor flux
-  node: T mode would drop the leakage's saturation, so a model with both saturations lost the
-  leakage's as soon as the main one moved off zero (own blind seed 43, set 17: the pair fitted
-  worse than the leakage alone, 6.19 against 1.29 held-out chi^2);
-* load torques (N m, summed): ``T_L`` constant and passive (it opposes motion like Coulomb
-  friction and holds a shaft at rest), ``T_q (w/w_ref)|w/w_ref|`` (fan, pump; ``w_ref``
-  mechanical rad/s), ``T_s`` passive and switched on at ``t_step`` (s) over a smooth
-  ``0.5 (1 + tanh((t - t_step)/t_rise))`` (``t_rise = 0``: a hard step), or with ``tau_s > 0``
-  over a first-order rise (and fall at ``t_step_off``) of that time constant, a share ``T_s_speed``
-  of it proportional to speed, ``w/w_ref`` (a DC machine loaded on a resistor: its torque follows
-  its armature circuit); they act on the load side of a two-mass shaft, else on the single mass;
-* two-mass shaft (``J_l > 0``): the motor's own inertia is ``J``, the load's ``J_l``, coupled by
-  ``T_sh = k_sh twist + c_sh (w_m - w_l)``; with free play of half-width ``backlash`` the spring
-  and damper act only in contact, ``T_sh = k_sh (twist -+ backlash) + c_sh (w_m - w_l)`` beyond
-  it and 0 within it; friction ``fv``, ``fc`` on the motor shaft, the speed
-  output is the load side's (states ``w_l`` mechanical rad/s, ``twist`` rad);
-* leakage saturation with a linear part: ``i_s = dpsi/(L_sigma l(x))``,
-  ``l = ls_floor + (1 - ls_floor)/(1 + ls_k x^ls_exp)`` (``ls_floor = 0``: the form above);
-* iron loss across the stator EMF ``e_s = d psi_s/dt`` (``g_fe_s``, S), the other end of the
-  leakage from ``g_fe``: the terminal current is ``i_s + g_fe_s e_s`` with
-  ``e_s = (v - Rs i_s)/(1 + Rs g_fe_s)`` (algebraic, no new state; with a held input a sample
-  closes the previous interval, so it sees the previous sample's voltage). A loss resistance that sits
-  between the two (a T circuit's magnetising node) is a blend of both.
+Everything compiled lives in this one file: numba's on-disk cache is keyed by the source file
+of each function, and a caller's cached code holds its callees' code, so a compiled helper in
+another file could be edited without the stepper here seeing it.
 """
 
 from __future__ import annotations
@@ -87,7 +28,6 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
     base_rows,
     valid_rows,
 )
-from benchmark.problems.timedomain.extended_tmode import _t_constants, _t_mode, _t_solve
 from benchmark.problems.timedomain.simulation import run_split, substep_voltages
 
 N_STATES = 12
@@ -182,6 +122,100 @@ def _resist(direction, drive, tc):
     if drive < -tc:
         return -tc
     return drive
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _t_mode(c):
+    """The row's magnetising branch saturates at a T circuit's node: a split is set, the
+    magnetising curve bends, and the leakage does not saturate (see the module docstring)."""
+    return c[36] > 0.0 and (c[7] != 0.0 or c[23] != 0.0) and c[10] == 0.0
+
+
+@numba.njit(cache=True, _nrt=False)
+def _t_constants(c, tm, warm):
+    """The T circuit of a T-mode row into ``tm``: ``Lm, Lls, Llr`` (H), the referral ``g0``,
+    ``c0 = 1/Lls + 1/Llr`` and ``c0 + 1/Lm`` (1/H); ``tm[6]`` 1 when the node's flux may start
+    from the previous solution (``warm``), ``tm[7]`` (0: none yet), ``tm[9]`` and ``tm[10]`` the
+    warm solver's last evaluation (:func:`_t_node_flux_warm`)."""
+    L_sig, LM, k = c[1], c[2], c[36]
+    Ls_tot = L_sig + LM
+    a = (1.0 - k) * LM
+    Lm = 0.5 * (a + math.sqrt(a * a + 4.0 * k * Ls_tot * LM))
+    Lls = Ls_tot - Lm
+    Llr = k * Lls
+    tm[0], tm[1], tm[2], tm[3], tm[4] = Lm, Lls, Llr, Lm / (Lm + Llr), 1.0 / Lls + 1.0 / Llr
+    tm[5], tm[6], tm[7] = tm[4] + 1.0 / Lm, 1.0 if warm else 0.0, 0.0
+
+
+@numba.njit(cache=True, _nrt=False)
+def _t_node_flux_warm(ms_k, ms_psi, ms_exp, k2, e2, Lm, c0, A, m, tm):
+    """The T node's flux magnitude (Wb) by Newton near the root: the first step from the last
+    evaluation of the trajectory (``tm[7]`` flux, ``tm[9]`` curve factor, ``tm[10]`` its
+    derivative times the flux, no power needed), then steps with one power per curve term
+    (``u^n`` as ``u^(n-1) u``) and reciprocals, to a step of 1e-8 (quadratic convergence: the
+    error left is below 1e-14). ``m``: the unsaturated bound."""
+    inv_psi = 1.0 / ms_psi
+    inv_Lm = 1.0 / Lm
+    if tm[7] > 0.0:
+        m0, sat, usat = tm[7], tm[9], tm[10]
+        guess = m0 - (m0 * (c0 + sat * inv_Lm) - A) / (c0 + (sat + usat) * inv_Lm)
+        if 0.0 < guess < m:
+            m = guess
+    for _ in range(30):
+        u = m * inv_psi
+        sat = 1.0
+        dsat = 0.0
+        if ms_k != 0.0:
+            pd = u ** (ms_exp - 1.0)
+            sat += ms_k * (pd * u)
+            dsat += ms_k * ms_exp * pd
+        if k2 != 0.0:
+            pd = u if e2 == 2.0 else u ** (e2 - 1.0)
+            sat += k2 * (pd * u)
+            dsat += k2 * e2 * pd
+        tm[7], tm[9], tm[10] = m, sat, u * dsat
+        step = (m * (c0 + sat * inv_Lm) - A) / (c0 + (sat + u * dsat) * inv_Lm)
+        m -= step
+        if abs(step) <= 1e-8 * (m + 1e-300):
+            break
+    return m
+
+
+@numba.njit(cache=True, _nrt=False)
+def _t_solve(c, x, tm):
+    """T mode: stator and total rotor currents (T units, A) and the referral ``Lm/(Lm + Llr)``
+    (the circuit's constants in ``tm``, :func:`_t_constants`). The node's flux solves its
+    current balance by Newton from the unsaturated solution (an upper bound; the plant), or
+    with a warm ``tm`` by :func:`_t_node_flux_warm` (the identification model's batch kernel)."""
+    ms_k, ms_psi, ms_exp, k2, e2 = c[7], c[8], c[9], c[23], c[24]
+    Lm, Lls, Llr, g0, c0 = tm[0], tm[1], tm[2], tm[3], tm[4]
+    pr_a = x[2] / g0
+    pr_b = x[3] / g0
+    A_a = x[0] / Lls + pr_a / Llr
+    A_b = x[1] / Lls + pr_b / Llr
+    A = math.sqrt(A_a * A_a + A_b * A_b)
+    m = A / tm[5]  # the unsaturated solution: an upper bound (s >= 1)
+    if tm[6] > 0.0:
+        m = _t_node_flux_warm(ms_k, ms_psi, ms_exp, k2, e2, Lm, c0, A, m, tm)
+    else:
+        for _ in range(30):
+            u = m / ms_psi
+            sat = 1.0
+            dsat = 0.0
+            if ms_k != 0.0:
+                sat += ms_k * u**ms_exp
+                dsat += ms_k * ms_exp * u ** (ms_exp - 1.0) / ms_psi
+            if k2 != 0.0:
+                sat += k2 * u**e2
+                dsat += k2 * e2 * u ** (e2 - 1.0) / ms_psi
+            f = m * (c0 + sat / Lm) - A
+            step = f / (c0 + (sat + m * dsat) / Lm)
+            m -= step
+            if abs(step) <= 1e-13 * (m + 1e-300):
+                break
+    pm_a = A_a * m / A if A > 0.0 else 0.0
+    pm_b = A_b * m / A if A > 0.0 else 0.0
+    return (x[0] - pm_a) / Lls, (x[1] - pm_b) / Lls, (pr_a - pm_a) / Llr, (pr_b - pm_b) / Llr, g0
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
@@ -464,14 +498,10 @@ def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
 
 def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
     """Outputs of a population of extended rows from rest: (n_pop, 3, N) i_alpha, i_beta (A),
-    mechanical speed (rad/s); NaN from where a candidate diverges (or for invalid rows).
-
-    The rows are split into blocks run in parallel (:func:`kernel_threads` of them; one inside
-    a worker of the batched fitting engine, which runs fits side by side itself); each row's
-    outputs are the same bit for bit whatever the blocks."""
-    rows = np.ascontiguousarray(rows, dtype=float)
-    v_a = np.ascontiguousarray(v_a, dtype=float)
-    v_b = np.ascontiguousarray(v_b, dtype=float)
+    mechanical speed (rad/s); NaN from where a candidate diverges (or for invalid rows). The
+    rows run in parallel blocks (:func:`~benchmark.problems.timedomain.simulation.run_split`);
+    a row's outputs do not depend on the blocks."""
+    rows, v_a, v_b = (np.ascontiguousarray(a, dtype=float) for a in (rows, v_a, v_b))
     out = np.full((rows.shape[0], 3, v_a.shape[0]), np.nan)
     run_split(_simulate_block, rows.shape[0], rows, v_a, v_b, bool(linear), float(h), int(substeps), out)
     return out

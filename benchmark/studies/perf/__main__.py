@@ -5,6 +5,7 @@
     python -m benchmark.studies.perf                 # full run, writes results/perf.md (a few minutes)
     python -m benchmark.studies.perf quick=true      # fewer repeats, shorter references (about a minute)
     python -m benchmark.studies.perf out=/tmp/p.md   # write the report elsewhere
+    python -m benchmark.studies.perf reference=DIR   # the diagnoses against an earlier checkout too
 
 What it measures, all in one run (so ratios compare like with like on a shared machine):
 
@@ -36,6 +37,11 @@ What it measures, all in one run (so ratios compare like with like on a shared m
 6. **Identification end to end**: ``benchmark.core.harness.run`` with ``+experiment=table1`` (60000
    GENESIS trials) in a fresh interpreter, wall time from process start to exit, cold cache
    (compile included) and warm cache, on 2 threads (and warm on 1 thread).
+7. **Diagnosis**: ``python -m benchmark.diagnose data.path=DIR`` of the twelve records of
+   :mod:`.diagnosis_records` (three sources; DOL, six-step and PWM starts; with and without a
+   stop record; 1 to 7.5 kW, 2 to 6 poles), each in a fresh interpreter with a warm cache; with
+   ``reference=DIR`` (an earlier checkout) the reference diagnoses each record right before, and
+   the report checks the verdicts against it (:mod:`.diagnosis_report`).
 
 Timings are the best of several repeats, interleaved across the configurations so that load
 from other processes spreads over all of them; the load average is recorded.
@@ -69,7 +75,7 @@ from benchmark.studies.perf.report import report
 
 
 def parse_args(argv: list[str]) -> dict:
-    opts = {"quick": False, "out": str(ROOT / "results" / "perf.md")}
+    opts = {"quick": False, "out": str(ROOT / "results" / "perf.md"), "reference": None}
     for a in argv:
         if "=" not in a:
             raise SystemExit(f"benchmark.studies.perf: expected key=value arguments (quick=true, out=PATH), got {a!r}")
@@ -78,8 +84,10 @@ def parse_args(argv: list[str]) -> dict:
             opts["quick"] = v.lower() in ("1", "true", "yes")
         elif k == "out":
             opts["out"] = v
+        elif k == "reference":
+            opts["reference"] = v
         else:
-            raise SystemExit(f"benchmark.studies.perf: unknown key {k!r}; known: quick, out")
+            raise SystemExit(f"benchmark.studies.perf: unknown key {k!r}; known: quick, out, reference")
     return opts
 
 
@@ -305,12 +313,16 @@ def section_identification(quick: bool) -> dict:
     return {"budget": int(budget), "runs": runs}
 
 
-def section_diagnosis() -> dict:
-    """One diagnosis (every candidate, forward selection) in a fresh interpreter, warm cache."""
-    with tempfile.TemporaryDirectory(prefix="imbench-numba-cache-") as d:
-        _run_probe("compile", [], d)  # fill the cache: the diagnosis is timed as a user's second run
-        rec, wall = _run_probe("diagnose", [CONF], d, threads=2)
-    return {"record": rec, "process_wall": wall}
+def section_diagnosis(reference: str | None = None, say=print) -> dict:
+    """The diagnosis of each record of :mod:`.diagnosis_records` (fresh interpreters, warm caches;
+    with ``reference``, a checkout diagnosed right before on each record): :mod:`.diagnosis_runs`."""
+    from benchmark.studies.perf.diagnosis_records import make_records
+    from benchmark.studies.perf.diagnosis_runs import run_all
+
+    with tempfile.TemporaryDirectory(prefix="imbench-perf-records-") as d:
+        records = make_records(Path(d) / "records")
+        runs = run_all(records, ROOT, Path(d) / "runs", Path(reference).resolve() if reference else None, say=say)
+    return {"runs": runs, "reference": reference}
 
 
 def main(argv=None) -> int:
@@ -348,9 +360,8 @@ def main(argv=None) -> int:
     ident = section_identification(quick)
     for name, (rec, wall) in ident["runs"].items():
         say(f"  {name}: {wall:.2f} s wall, {rec['evaluations']} evaluations")
-    say("diagnosis (fresh interpreter, warm cache)")
-    diag = section_diagnosis()
-    say(f"  {diag['record']['wall_s']:.1f} s, verdict {diag['record']['verdict']}")
+    say("diagnoses of the twelve records (fresh interpreters, warm caches)")
+    diag = section_diagnosis(opts["reference"], say=lambda s: say("  " + s))
     load1 = os.getloadavg()[0]
     text = report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, time.perf_counter() - t_start,
                   diag)

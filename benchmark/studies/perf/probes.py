@@ -3,7 +3,6 @@ and the process exit are timed as a user meets them)::
 
     python -m benchmark.studies.perf.probes compile
     python -m benchmark.studies.perf.probes identify CONF_DIR BUDGET [OVERRIDE ...]
-    python -m benchmark.studies.perf.probes diagnose CONF_DIR [OVERRIDE ...]
 
 Each prints one JSON line. ``compile``: seconds to import the simulation and to compile each
 kernel. ``identify``: the Table 1 identification through the harness, with the time spent in
@@ -72,30 +71,8 @@ def identify_probe(conf_dir: str, budget: str, overrides: list[str]) -> dict:
     return out
 
 
-def diagnose_probe(conf_dir: str, overrides: list[str]) -> dict:
-    """One diagnosis of the default 1 s, 12 kHz start-up (a double cage injected, noisy), with
-    every candidate of the catalogue and forward selection, through the entry point's path."""
-    import tempfile
-    from pathlib import Path
-
-    from hydra import compose, initialize_config_dir
-
-    from benchmark.core.harness import run_diagnosis
-
-    with initialize_config_dir(config_dir=conf_dir, version_base="1.3"):
-        diagnosis_config = compose("diagnose", overrides=["effects=[double_cage]", "noise=noisy", "figures=false",
-                                                          *overrides])
-    t0 = time.perf_counter()
-    doc = run_diagnosis(diagnosis_config, Path(tempfile.mkdtemp(prefix="imbench-perf-diag-")))
-    return {"wall_s": time.perf_counter() - t0, "verdict": doc.get("verdict"), "status": doc.get("status"),
-            "candidates": len(doc.get("ranking") or doc.get("candidates") or []),
-            "cpu_s": time.process_time(), "inside_s": time.perf_counter() - T0}
-
-
 if __name__ == "__main__":
     if sys.argv[1] == "compile":
         print(json.dumps(compile_probe()))
-    elif sys.argv[1] == "diagnose":
-        print(json.dumps(diagnose_probe(sys.argv[2], sys.argv[3:])))
     else:
         print(json.dumps(identify_probe(sys.argv[2], sys.argv[3], sys.argv[4:])))

@@ -283,13 +283,11 @@ def report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, ela
             + ".\n"
         )
     if diag is not None:
-        d = diag["record"]
-        L.append(
-            "\n## Diagnosis\n\nOne `python -m benchmark.diagnose` of the 1 s, 12 kHz start-up (the default motor, a "
-            "double cage injected, noisy preset) with every candidate of the catalogue and forward selection, in a "
-            f"fresh interpreter with a warm cache: **{d['wall_s']:.1f} s** inside the diagnosis "
-            f"({diag['process_wall']:.1f} s for the whole process, {d['cpu_s']:.1f} CPU s); verdict "
-            f"`{d['verdict']}` ({d['status']}). Target <= 60 s on 2 cores: "
-            f"{'met' if d['wall_s'] <= 60 else 'NOT met'}.\n"
-        )
+        from benchmark.studies.perf.diagnosis_report import render
+
+        ref = f" against the reference checkout `{diag['reference']}`" if diag.get("reference") else ""
+        L.append("\n## Diagnosis\n\n`python -m benchmark.diagnose data.path=DIR` (default configuration, figures "
+                 "included) of each record of `benchmark/studies/perf/diagnosis_records.py`, each in a fresh "
+                 f"interpreter with a warm compile cache{ref}; wall and CPU seconds of the whole process.\n\n"
+                 + render(diag["runs"]) + "\n")
     return "\n".join(L) + "\n"

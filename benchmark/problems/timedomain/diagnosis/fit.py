@@ -252,10 +252,12 @@ class JointModel:
             measure = getattr(eff, "measure", None)
             if measure is not None:
                 sim = measure(sim, X[:, s], self.ctx)
-        parts = [np.asarray(sim)[:, self._rows_out, :].reshape(len(X), -1)]
+        out = np.empty((len(X), d.n_residuals))
+        k = len(self._rows_out) * d.n_startup
+        out[:, :k] = np.asarray(sim)[:, self._rows_out, :].reshape(len(X), -1)
         if d.stop_t is not None:
-            parts.append(self.recorded_stop(X, rows))
-        return np.concatenate(parts, axis=1)
+            out[:, k:] = self.recorded_stop(X, rows)
+        return out
 
     def recorded_stop(self, X: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """The stop record as the speed sensor gives it (n, N_stop), with the speed at the stop's
@@ -312,14 +314,19 @@ class JointModel:
         return FreeCoast(d.stop_t, J, fv, A, C)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        return self.residuals_of(self.simulate(X))
+        return self.residuals_of(self.simulate(X), overwrite=True)
 
-    def residuals_of(self, outputs: np.ndarray) -> np.ndarray:
+    def residuals_of(self, outputs: np.ndarray, overwrite: bool = False) -> np.ndarray:
         """Noise-normalised residuals (n, n_residuals) of model outputs (:meth:`simulate`), a
-        diverged output :data:`DIVERGED`."""
+        diverged output :data:`DIVERGED`; ``overwrite``: in the array ``outputs``."""
+        r = outputs if overwrite else np.array(outputs, dtype=float)
         with np.errstate(all="ignore"):
-            r = (self.measured[None, :] - outputs) * self.weight[None, :]
-        return np.where(np.isfinite(r), r, DIVERGED)
+            np.subtract(self.measured[None, :], r, out=r)
+            r *= self.weight[None, :]
+        bad = ~np.isfinite(r)
+        if bad.any():
+            r[bad] = DIVERGED
+        return r
 
     def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_iterations: int = 12,
             tol: float = 1e-5) -> np.ndarray:

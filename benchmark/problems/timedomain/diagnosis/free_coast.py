@@ -15,6 +15,7 @@ the same operations as evaluating the closed form afresh (the same numbers, bit 
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 
@@ -41,7 +42,7 @@ class FreeCoast:
         n = len(self.tau)
         w0 = np.broadcast_to(np.asarray(w0, float), (n, 1))
         with np.errstate(all="ignore"):
-            w = (w0 + self.tau * self.c) * self.decay - self.tau * self.c
+            w = _decayed(np.ascontiguousarray(w0[:, 0]), (self.tau * self.c)[:, 0], self.decay)
             if np.any(self.fan):
                 _, Cf, Jf, fvf = self.fan_terms
                 w0f, q = w0[self.fan], self.q
@@ -53,9 +54,30 @@ class FreeCoast:
 def at_rest_once_stopped(w: np.ndarray) -> np.ndarray:
     """``w`` (n, N) with every sample from the first one that is not positive (or NaN) on set to
     0 (in place; returned)."""
-    down = ~(w > 0)
-    first = np.argmax(down, axis=1)
-    hit = down[np.arange(len(w)), first]
-    cols = np.arange(w.shape[1])[None, :]
-    w[hit[:, None] & (cols >= first[:, None])] = 0.0
+    _zero_from_first_stop(w)
+    return w
+
+
+@numba.njit(cache=True, nogil=True)
+def _zero_from_first_stop(w):
+    n, m = w.shape
+    for r in range(n):
+        stopped = False
+        for k in range(m):
+            if not stopped and not w[r, k] > 0.0:
+                stopped = True
+            if stopped:
+                w[r, k] = 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _decayed(w0, offset, decay):
+    """``(w0 + offset) decay - offset`` row by row (the exponential coast, ``offset = tau c``),
+    the same operations as the array expression."""
+    n, m = decay.shape
+    w = np.empty((n, m))
+    for r in range(n):
+        a = w0[r] + offset[r]
+        for k in range(m):
+            w[r, k] = a * decay[r, k] - offset[r]
     return w
