@@ -241,3 +241,11 @@ def test_real_table_default_run_reaches_the_unconstrained_fit(tmp_path):
     assert at_bound(rec) == []
     text = " ".join(rec["warnings"])
     assert "R0 is not" in text and "R1_total" in text and "conversion" in rec["problem_info"]
+
+
+def test_the_sweep_diagnosis_refuses_a_test_report(full_set, tmp_path):
+    from benchmark.core.harness import run_diagnosis
+
+    cfg = compose_config(["problem=admittance", f"data.path={full_set['clean']}", "figures=false"], name="diagnose")
+    with pytest.raises(ConfigError, match="kind: loadtest.*slip sweeps"):
+        run_diagnosis(cfg, tmp_path / "diag")
