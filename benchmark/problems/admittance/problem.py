@@ -44,6 +44,7 @@ import numpy as np
 
 from benchmark.core.errors import ConfigError
 from benchmark.core.problem import Problem
+from benchmark.problems.admittance import reporting
 from benchmark.problems.admittance.circuit import input_admittance, rotor_admittance
 from benchmark.problems.admittance.data import AdmittanceData
 from benchmark.problems.admittance.initial_models import model_a, model_e
@@ -370,97 +371,15 @@ class AdmittanceProblem(Problem):
         return admittance_plots(self, x, record)
 
     def describe(self) -> dict:
-        d = self.data
-        info = {
-            "data": d.source,
-            "files": d.files,
-            "readings": int(d.n),
-            "frequency_hz": d.frequency,
-            "pole_pairs": d.pole_pairs,
-            "voltage_v": sorted({float(v) for v in np.round(d.voltage, 6)}),
-            "slip_range": [float(self._s.min()), float(self._s.max())],
-            "model": f"{self.model}-parameter" + (" (X1 = X2 tied)" if self.tie_x1_x2 else ""),
-            "cost": "S^2 = mean over G and B of ((Y_calc - Y_meas)/Y_unit)^2"
-            + (f" + stalled-torque term (weight {self.stalled_torque_weight})" if self._stall else ""),
-            "normalisation": self.normalisation,
-            "full_scale_admittance_s": self.full_scale_admittance,
-            "temperature_compensation": self._describe_compensation(),
-            "identifiability": self.identifiability_notes(),
-        }
-        if d.notes:
-            info["conversion"] = list(d.notes)
-        if self._kf is not None:
-            info["frequency_ratio"] = sorted({float(v) for v in np.round(self._kf, 6)})
-        if self.model_choice is not None:
-            info["model_choice"] = self.model_choice.record()
-        if self.magnetising_curve is not None:
-            info["magnetising_curve"] = self.magnetising_curve.rows(d.frequency)
-        return info
+        """Facts recorded in ``result.json`` (:func:`benchmark.problems.admittance.reporting.describe`)."""
+        return reporting.describe(self)
 
     def quality_warnings(self, x) -> list[str]:
-        """A negative R1sigma (a stray-loss resistance cannot be negative) is reported with why:
-        R1sigma = R1_total - R1 (DC), so it is negative when the fitted R1_total comes out below
-        the DC resistance, within the error of R1_total at realistic noise; the circuit is
-        still valid (only the sum R1_total acts)."""
-        est = self.estimate(x)
-        out = [] if self.model_choice is None else self.model_choice.warnings()
-        if self.data.test is not None and self.magnetising_curve is None:
-            out.append("no no-load series at two or more voltages: the magnetising reactance is taken constant, and "
-                       "its rise as the air-gap flux falls with load goes into R1_total and R0 (on the synthetic "
-                       "18.5 kW motor's load points, R1_total +40 %, R0 -20 %): read them as not fixed")
-        if est.get("R1sigma", 0.0) < 0:
-            return out + [f"R1sigma = {est['R1sigma']:.3g} ohm is negative (not physical): R1sigma = R1_total - R1 "
-                    "with R1 the "
-                    f"DC resistance {est['R1']:.4g} ohm, and the fitted R1_total = {est['R1_total']:.4g} ohm came out "
-                    "below it; only R1_total acts on the admittance, so read R1sigma as 0 within the uncertainty of "
-                    "R1_total (see standard_error)"]
-        return out
-
-    def _describe_compensation(self) -> dict:
-        if self.profile is None:
-            return {
-                "active": False,
-                "note": self._comp_note or "off (problem.temperature_compensation: false)",
-            }
-        p = self.profile
-        return {
-            "active": True,
-            "heat_model": p.heat_model,
-            "cooling_rates_known": p.cooling,
-            "theta_before_c": p.theta_before,
-            "theta_after_c": p.theta_after,
-            "theta_ref_c": p.theta_ref,
-            "theta_first_reading_c": float(p.theta[0]),
-            "theta_last_reading_c": float(p.theta[-1]),
-            "R1_dc_at_ref_ohm": p.R1_ref,
-            "notes": p.notes,
-        }
+        """The problem's own warnings (:func:`benchmark.problems.admittance.reporting.quality_warnings`)."""
+        return reporting.quality_warnings(self, x)
 
     def identifiability_notes(self) -> list[str]:
-        notes = []
-        if self.R1_dc is None:
-            notes.append(
-                "R1 and R1sigma act only as their sum at one frequency: R1_total = R1 + R1sigma is "
-                "reported; give stator_dc_resistance to separate them"
-            )
-        else:
-            notes.append(
-                "R1 is the DC stator resistance referred to the reference temperature (measured, not "
-                "fitted); R1sigma = R1_total - R1 inherits the error of R1_total"
-            )
-        if not self.tie_x1_x2:
-            if self._s.min() >= 0 and self.model == 8:
-                notes.append(
-                    "no generating-region readings (s < 0): re-referring the rotor trades R2sigma "
-                    "against the X1/X2 split without changing Y; tie X1 = X2 (problem.tie_x1_x2)"
-                )
-            else:
-                notes.append(
-                    "X1 and X2 are separated only through the small R0 and (8-parameter) the sign "
-                    "change of R2sigma at s = 0: their split is weakly determined at realistic noise"
-                )
-        notes.append("R0 is weakly determined at low voltage: quote its spread over noise realisations")
-        return notes
+        return reporting.identifiability_notes(self)
 
     # -- the hook used by plugins.lindsay_barton ---------------------------------------------
 
