@@ -249,3 +249,23 @@ def test_the_sweep_diagnosis_refuses_a_test_report(full_set, tmp_path):
     cfg = compose_config(["problem=admittance", f"data.path={full_set['clean']}", "figures=false"], name="diagnose")
     with pytest.raises(ConfigError, match="kind: loadtest.*slip sweeps"):
         run_diagnosis(cfg, tmp_path / "diag")
+
+
+def test_measured_temperatures_without_a_dc_resistance_scale_the_fitted_resistances(full_set, tmp_path):
+    """Without the DC value the temperature column still refers R1_total and R2 to one
+    temperature (multiplicatively); the friction line then keeps the stator copper loss (noted)."""
+    import shutil
+
+    from benchmark.problems.admittance.model_choice import fit_candidate
+
+    folder = Path(shutil.copytree(full_set["noisy"], tmp_path / "nodc"))
+    meta = yaml.safe_load((folder / "meta.yaml").read_text())
+    del meta["stator_dc_resistance"]
+    (folder / "meta.yaml").write_text(yaml.safe_dump(meta))
+    p = build_problem(compose_config(["problem=admittance", f"data.path={folder}", "problem.model=6",
+                                      "problem.tie_x1_x2=true"]))
+    assert p.R1_dc is None and p._k1 is not None and p.profile.theta_ref == 90.0
+    assert any("copper loss not removed" in n for n in p.data.notes)
+    est = p.estimate(fit_candidate(p, 6, True).x)
+    for k in ("R1_total", "R2", "X1+X2", "X0"):
+        assert abs(est[k] / p.truth[k] - 1) < 0.02, (k, est[k])
