@@ -178,13 +178,13 @@ def check_data_kind(folder: Path, problem: str, expected: str) -> None:
     except (yaml.YAMLError, UnicodeDecodeError, ValueError, RecursionError):
         return  # the loader reports a malformed meta.yaml with file and line
     kind = doc.get("kind") if isinstance(doc, dict) else None
-    if isinstance(kind, str) and kind != expected and kind in DATA_KIND_PROBLEM:
+    if isinstance(kind, str) and kind != expected and DATA_KIND_PROBLEM.get(kind, problem) != problem:
         raise ConfigError(f"data.path: {folder} holds kind: {kind}, which problem={problem} does not read; "
                           f"use problem={DATA_KIND_PROBLEM[kind]}")
 
 
 #: Which problem reads a data folder of each ``kind`` (meta.yaml).
-DATA_KIND_PROBLEM = {"startup": "timedomain", "admittance": "admittance"}
+DATA_KIND_PROBLEM = {"startup": "timedomain", "admittance": "admittance", "loadtest": "admittance"}
 
 
 def build_problem(cfg: DictConfig) -> Problem:
