@@ -30,7 +30,8 @@ Magnetising curve ``psi_m = F(|i_m|)`` (``MagnetisingCurve``), forms:
     points), continued with the air slope beyond the last point.
 
 Every form has the slope ``Lm0`` at zero current, so ``Lm0`` is the unsaturated magnetising
-inductance a small-signal test would measure (``steel_gap``: its first segment's slope).
+inductance a small-signal test would measure (``steel_gap``: its largest secant inductance,
+the slope at zero for a steel without a Rayleigh region such as M400-50A).
 
 Leakage characteristic ``|lambda| = g(|i|) = (L_lin + L_sat phi(|i|)) |i|`` (``LeakageCurve``):
 a linear part (slot body, end windings) plus a saturable part (tooth tips, slot bridges):
@@ -170,22 +171,30 @@ class MagnetisingCurve:
         return cls(form, Lm0, math.exp(log_knee), linf_ratio * Lm0)
 
     @classmethod
-    def steel_gap(cls, Lm0: float, psi_ref: float, drop: float, b_ref: float = 1.5, bh: np.ndarray = M400_50A):
-        """The gap-plus-iron curve (form ``steel_gap``) whose flux ``psi_ref`` (Wb peak) sits at
-        the flux density ``b_ref`` (T) and whose secant inductance there is ``(1 - drop) Lm0``.
+    def steel_gap(cls, Lm0: float, psi_ref: float, drop: float, iron_ratio: float, bh: np.ndarray = M400_50A):
+        """The gap-plus-iron curve (form ``steel_gap``) with the iron path ``iron_ratio`` times
+        the gap length, whose secant inductance at the flux ``psi_ref`` (Wb peak) is
+        ``(1 - drop) Lm0``, ``Lm0`` its largest secant inductance (where the steel's
+        permeability ``B/H`` peaks). The flux density at ``psi_ref`` is solved for.
 
-        With ``p(B) = mu0 H(B)/B`` the secant over the initial slope is
-        ``(1 + x p(0)) / (1 + x p(b_ref))``, so the iron-over-gap ratio is
-        ``x = drop / ((1 - drop) p(b_ref) - p(0))``."""
-        pts = steel_table(bh, 0.0)
-        p0 = MU0 * float(steel_field(bh, pts[1, 1])) / pts[1, 1]  # the first segment's slope
-        p_ref = MU0 * float(steel_field(bh, b_ref)) / b_ref
-        if not (0 < drop < 1 and (1 - drop) * p_ref > p0):
-            raise ValueError(f"steel_gap: a drop of {drop} is not reachable at {b_ref} T")
-        x = drop / ((1 - drop) * p_ref - p0)
+        With ``p(B) = mu0 H(B)/B`` the secant is ``~ 1/(1 + x p(B))``, so ``psi_ref`` sits where
+        ``p(B) = ((1 + x min p)/(1 - drop) - 1)/x``, on the rising branch of ``p``. A steel
+        whose permeability rises from low fields (a Rayleigh region, as M800-50A's) gives a
+        curve whose slope at zero is below ``Lm0``; for M400-50A it is ``Lm0``."""
+        from scipy.optimize import brentq
+
+        x = float(iron_ratio)
+        B = steel_table(bh, 0.0)[1:, 1]
+        p = MU0 * steel_field(bh, B) / B
+        k = int(np.argmin(p))
+        target = ((1 + x * p[k]) / (1 - drop) - 1) / x
+        if not (0 < drop < 1 and p[k] < target < p[-1]):
+            raise ValueError(f"steel_gap: a drop of {drop} with an iron path {x} x the gap is beyond the steel's "
+                             f"table (up to {bh[-1, 0]} T)")
+        b_ref = brentq(lambda b: MU0 * float(steel_field(bh, b)) / b - target, B[k], B[-1], xtol=1e-12)
         pts = steel_table(bh, x)
         a = psi_ref / b_ref  # Wb per T
-        c = a / (Lm0 * (1 + x * p0))  # A per T
+        c = a / (Lm0 * (1 + x * p[k]))  # A per T
         i, psi = c * pts[:, 0], a * pts[:, 1]
         Linf = a / (c * (1 + x))
         knee = float(np.interp(psi_ref, psi, i))

@@ -8,16 +8,17 @@ equations and ranges of every form are in ``docs/effect_forms.md``. Draw ranges 
 rated current amplitude, ``T_n`` rated torque, ``f`` rated frequency, ``M`` internal steps
 per sample); held-out forms marked (h):
 
-* ``coulomb_friction`` (``coulomb``; (h) ``stribeck``: breakaway 1.2-2 x the Coulomb level,
-  Stribeck speed 0.5-5 rad/s): size = the plant's ``fc``, 0.3-1.5 % of ``T_n``, N m.
+* ``coulomb_friction`` (``coulomb``; (h) ``bearing``: Palmgren's hydrodynamic term, 0.5-2 x
+  the Coulomb level at synchronous speed, and a Stribeck breakaway 1.2-2 x the Coulomb level
+  below 0.5-5 rad/s): size = the plant's ``fc``, 0.3-1.5 % of ``T_n``, N m.
 * ``double_cage`` (``double_cage`` two cages, ``deep_bar`` 3-6 bar slices; (h) ``tapered_bar``
   5-8 slices of a trapezoidal bar, bottom over top width 0.4-2.5): size = rotor resistance at
   ``f`` over its low-slip value, 1.3-2.2 (double cage), 1.2-1.6 (bars). When the motor's own
   rotor leakage cannot give the ratio it grows (at most 2x) and the truth holds the realised
   low-slip values; ``achieved_size`` is the realised ratio.
-* ``main_saturation`` (``frohlich``, ``arctan``, ``table``; (h) ``steel_gap`` (air gap plus an
-  M400-50A iron path, rated flux at 1.4-1.65 T), ``langevin``): size = drop of the secant
-  magnetising inductance at rated flux, 0.08-0.30 (fraction).
+* ``main_saturation`` (``frohlich``, ``arctan``, ``table``; (h) ``steel_gap``: an air gap plus
+  an M400-50A iron path 80-400 x the gap (log-uniform), ``langevin``): size = drop of the
+  secant magnetising inductance at rated flux, 0.08-0.30 (fraction).
 * ``iron_loss`` (``eddy_winding`` with an eddy time constant 0.2-1 ms, ``shunt`` = a
   resistance across the magnetising branch; (h) ``steinmetz``: hysteresis 40-70 % of the
   loss at ``f``, exponent 1.6-2.2, eddy time constant 0.2-1 ms): size = core loss at rated
@@ -51,7 +52,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from synthetic.independent.curves import LeakageCurve, MagnetisingCurve
+from synthetic.independent.curves import M400_50A, LeakageCurve, MagnetisingCurve
 from synthetic.independent.effect_base import Build, Effect, log_uniform
 from synthetic.independent.inverter import Inverter
 from synthetic.independent.plant import IronLoss
@@ -72,17 +73,19 @@ class CoulombFriction(Effect):
 
     def _draw(self, rng, motor, form):
         spec = {"size": float(rng.uniform(0.003, 0.015) * motor.rated_torque)}
-        if form == "stribeck":
-            spec.update(breakaway_ratio=float(rng.uniform(1.2, 2.0)), stribeck_speed=float(rng.uniform(0.5, 5.0)))
+        if form == "bearing":
+            spec.update(breakaway_ratio=float(rng.uniform(1.2, 2.0)), stribeck_speed=float(rng.uniform(0.5, 5.0)),
+                        palmgren_share=float(rng.uniform(0.5, 2.0)))
         return spec
 
     def _apply(self, build, spec):
         build.plant["machine"] = replace(build.machine, fc=float(spec["size"]))
-        if spec["form"] == "stribeck":
+        if spec["form"] == "bearing":
             fs = spec["breakaway_ratio"] * spec["size"]
+            c_p = spec["palmgren_share"] * spec["size"] / build.motor.w_sync ** (2 / 3)
             build.plant["mechanics"] = replace(build.plant["mechanics"], breakaway=fs,
-                                               stribeck_speed=spec["stribeck_speed"])
-            return {"breakaway": fs}
+                                               stribeck_speed=spec["stribeck_speed"], palmgren=c_p)
+            return {"breakaway": fs, "palmgren": c_p}
 
 
 class DoubleCage(Effect):
@@ -111,17 +114,18 @@ class MainSaturation(Effect):
     def _draw(self, rng, motor, form):
         spec = {"size": float(rng.uniform(0.08, 0.30))}
         if form == "steel_gap":
-            spec["flux_density"] = float(rng.uniform(1.4, 1.65))
+            spec["iron_ratio"] = log_uniform(rng, 80.0, 400.0)
         return spec
 
     def _apply(self, build, spec):
         m, psi = build.machine, build.motor.psi_rated
         if spec["form"] == "steel_gap":
-            curve = MagnetisingCurve.steel_gap(m.Lm, psi, spec["size"], spec["flux_density"])
+            curve = MagnetisingCurve.steel_gap(m.Lm, psi, spec["size"], spec["iron_ratio"])
+            extra = {"flux_density": psi * M400_50A[-1, 0] / curve.table[1][-1]}  # T at the rated flux
         else:
-            curve = MagnetisingCurve.with_drop(spec["form"], m.Lm, psi, spec["size"])
+            curve, extra = MagnetisingCurve.with_drop(spec["form"], m.Lm, psi, spec["size"]), {}
         build.plant["magnetising"] = curve
-        return {"Lm0": curve.Lm0, "knee": curve.knee, "Linf": curve.Linf, "psi_ref": psi}
+        return {"Lm0": curve.Lm0, "knee": curve.knee, "Linf": curve.Linf, "psi_ref": psi, **extra}
 
 
 class IronLossEffect(Effect):
@@ -139,17 +143,19 @@ class IronLossEffect(Effect):
         w = 2 * math.pi * mo.frequency
         E = mo.psi_rated * w
         P = spec["size"] * mo.rated_power
-        h = float(spec.get("hysteresis_share", 0.0))  # steinmetz: the share of P the coercive current takes
-        Rc = 1.5 * E**2 / ((1 - h) * P)
         tau = float(spec.get("time_constant", 0.0))
+        if spec["form"] == "steinmetz":
+            iron = IronLoss.steinmetz(E, w, P, spec["hysteresis_share"], tau, spec["exponent"], mo.psi_rated)
+            build.plant["iron"] = iron
+            return {"R_fe": iron.R, "L_fe": iron.L, "coercive_current": iron.coercive}
+        Rc = 1.5 * E**2 / P
         if tau > 0:
             R = Rc / (1 + (w * tau) ** 2)
             L = tau * R
         else:
             R, L = Rc, 0.01 * build.machine.Lls  # a resistance across the magnetising branch
-        coercive = h * P / (1.5 * E)
-        build.plant["iron"] = IronLoss(R, L, coercive, float(spec.get("exponent", 2.0)), mo.psi_rated)
-        return {"R_fe": R, "L_fe": L, "Rc_equivalent": Rc, **({"coercive_current": coercive} if h else {})}
+        build.plant["iron"] = IronLoss(R, L)
+        return {"R_fe": R, "L_fe": L, "Rc_equivalent": Rc}
 
 
 class LeakageSaturation(Effect):

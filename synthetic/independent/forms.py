@@ -39,7 +39,7 @@ DEVELOPMENT = {
 
 #: Second physical forms, for scoring only (see the module docstring).
 HELDOUT = {
-    "coulomb_friction": ("stribeck",),
+    "coulomb_friction": ("bearing",),
     "double_cage": ("tapered_bar",),
     "main_saturation": ("steel_gap", "langevin"),
     "iron_loss": ("steinmetz",),
@@ -54,8 +54,28 @@ HELDOUT = {
     "channel_delay": ("anti_alias", "mux_skew"),
 }
 
+#: The motulator source (``synthetic/motulator_source.py``) injects three effects; development
+#: forms are motulator's own models, held-out forms are in ``synthetic/motulator_effects.py``.
+#: It has no form (and injects nothing) for the other effects.
+MOTULATOR_DEVELOPMENT = {
+    "main_saturation": ("power_law",),
+    "two_mass": ("spring",),
+    "load_torque": ("step", "constant", "quadratic"),
+}
+MOTULATOR_HELDOUT = {
+    "main_saturation": ("steel_gap",),
+    "two_mass": ("elastomer",),
+    "load_torque": ("dc_generator",),
+}
+
 #: Held-out forms drawn only for some scenario kinds (all others: every scenario).
 SCENARIOS = {"current_transformer": ("dol", "six_step")}
+
+
+def motulator_forms_of(name: str, which: str = "development") -> tuple[str, ...]:
+    """The motulator source's forms of effect ``name`` in form set ``which``."""
+    dev, held = MOTULATOR_DEVELOPMENT[name], MOTULATOR_HELDOUT[name]
+    return {"development": dev, "heldout": held, "all": dev + held}[check_form_set(which)]
 
 
 def check_form_set(which: str) -> str:

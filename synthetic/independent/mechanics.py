@@ -9,10 +9,12 @@ Friction on the motor shaft: viscous ``fv w_m`` and Coulomb ``fc sign(w_m)``. St
 shaft at standstill stays put while the torque driving it is within its Coulomb torque
 (the resisting torque is the driving torque clipped to ``+-fc``); after each integration
 step a speed that crossed zero is set to zero, so that it sticks or breaks away again.
-Held-out form ``stribeck``: the Coulomb level falls from the breakaway torque ``fs`` at
-standstill to ``fc`` in motion, ``fc + (fs - fc) exp(-(w/w_s)^2)`` (Stribeck's curve as in
-Armstrong-Helouvry, Dupont, Canudas de Wit, Automatica 30(7), 1994); standstill holds up to
-``fs``.
+Held-out form ``bearing``: the friction of rolling bearings and seals, a load-dependent
+torque ``fc`` plus Palmgren's hydrodynamic term ``c_p |w|^(2/3)`` (Palmgren, Ball and Roller
+Bearing Engineering, 1959; the SKF catalogue's ``M_0 ~ (nu n)^(2/3)``), with a Stribeck
+breakaway at standstill: the level ``fc + (fs - fc) exp(-(w/w_s)^2) + c_p |w|^(2/3)``
+(Stribeck's curve as in Armstrong-Helouvry, Dupont, Canudas de Wit, Automatica 30(7),
+1994); standstill holds up to ``fs``.
 
 Load torque (on the load side, or on the single mass): ``constant`` (passive: it opposes
 motion and acts like Coulomb friction), ``quadratic`` ``T_L (w/w_ref)^2`` (fan, pump),
@@ -42,7 +44,7 @@ from numba import njit
 
 LOADS = ("none", "constant", "quadratic", "step", "dc_generator")
 (M_JM, M_JL, M_FV, M_FC, M_K, M_C, M_BL, M_TWO, M_LOAD, M_TL, M_WREF, M_TSTEP, M_FS, M_WS, M_KE, M_RA, M_LA, M_UB,
- M_IB, M_ZR) = range(20)
+ M_IB, M_ZR, M_PG) = range(21)
 N_MECH = 5  # states: w_m, w_l, twist, theta, i_a
 
 
@@ -62,6 +64,7 @@ class Mechanics:
     t_step : instant of a step load (or of a DC generator's armature switch), s.
     breakaway : Stribeck breakaway torque ``fs``, N m (0: plain Coulomb friction).
     stribeck_speed : Stribeck speed ``w_s``, mechanical rad/s.
+    palmgren : Palmgren coefficient ``c_p``, N m (rad/s)^(-2/3).
     generator : DC generator ``(k_e V s/rad, R_a ohm, L_a H, U_b V, i_b A)`` (load ``dc_generator``).
     twist_ref : elastomer hardening twist ``z_r``, rad (0: linear spring).
     """
@@ -76,6 +79,7 @@ class Mechanics:
     t_step: float = 0.0
     breakaway: float = 0.0
     stribeck_speed: float = 1.0
+    palmgren: float = 0.0
     generator: tuple = (0.0, 1.0, 1.0, 0.0, 1.0)
     twist_ref: float = 0.0
 
@@ -96,12 +100,12 @@ class Mechanics:
         return math.sqrt(self.stiffness * (1 / J_motor + 1 / self.J_load)) / (2 * math.pi)
 
     def pack(self, J: float, fv: float, fc: float) -> np.ndarray:
-        out = np.zeros(20)
+        out = np.zeros(21)
         out[M_JM], out[M_JL], out[M_FV], out[M_FC] = J, self.J_load, fv, fc
         out[M_K], out[M_C], out[M_BL], out[M_TWO] = self.stiffness, self.damping, self.backlash, float(self.two_mass)
         out[M_LOAD], out[M_TL] = LOADS.index(self.load), self.load_torque
         out[M_WREF], out[M_TSTEP] = self.w_ref, self.t_step
-        out[M_FS], out[M_WS] = self.breakaway, self.stribeck_speed
+        out[M_FS], out[M_WS], out[M_PG] = self.breakaway, self.stribeck_speed, self.palmgren
         out[M_KE:M_IB + 1] = self.generator
         out[M_ZR] = self.twist_ref
         return out
@@ -113,12 +117,12 @@ class Mechanics:
 
 @njit(cache=True)
 def _coulomb(w, mech):
-    """Coulomb torque level of the motor shaft at speed ``w`` (Stribeck curve when
+    """Coulomb torque level of the motor shaft at speed ``w`` (the ``bearing`` law when
     ``breakaway`` is set), N m."""
     if mech[M_FS] == 0.0:
         return mech[M_FC]
     q = w / mech[M_WS]
-    return mech[M_FC] + (mech[M_FS] - mech[M_FC]) * math.exp(-q * q)
+    return mech[M_FC] + (mech[M_FS] - mech[M_FC]) * math.exp(-q * q) + mech[M_PG] * abs(w) ** (2.0 / 3.0)
 
 
 @njit(cache=True)

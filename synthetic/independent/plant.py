@@ -52,10 +52,38 @@ class IronLoss:
     alpha: float = 2.0
     psi_ref: float = 1.0
 
+    @classmethod
+    def steinmetz(cls, E: float, w: float, P: float, share: float, tau: float, alpha: float, psi_ref: float):
+        """The ``steinmetz`` winding (eddy time constant ``tau`` s) that dissipates ``P`` W
+        at the EMF amplitude ``E`` (V, flux ``psi_ref = E/w`` Wb) and angular frequency ``w``
+        (rad/s), and ``(share/2 + (1 - share)/4) P`` at ``w/2`` and the same flux: the
+        two-frequency separation of iron loss into a hysteresis share ``share`` (loss per
+        cycle independent of frequency) and eddy currents (per cycle proportional to it)."""
+        from scipy.optimize import fsolve
+
+        def miss(x):
+            R, ih = np.exp(x)
+            return [np.log(_steady_loss(R, tau * R, ih, E, w) / P),
+                    np.log(_steady_loss(R, tau * R, ih, E / 2, w / 2) / (P * (share / 2 + (1 - share) / 4)))]
+
+        start = np.log([1.5 * E**2 / ((1 - share) * P), share * P / (1.5 * E)])
+        R, ih = np.exp(fsolve(miss, start, xtol=1e-12))
+        return cls(float(R), float(tau * R), float(ih), float(alpha), float(psi_ref))
+
     def equivalent_resistance(self, f: float) -> float:
         """Parallel core-loss resistance giving the same loss at frequency ``f``, ohm."""
         x = 2 * math.pi * f * self.L
         return self.R * (1 + (x / self.R) ** 2)
+
+
+def _steady_loss(R: float, L: float, ih: float, E: float, w: float) -> float:
+    """Loss (W) of the dead-zone iron-loss winding (resistance ``R`` ohm, leakage ``L`` H,
+    coercive current ``ih`` A) under a rotating EMF of amplitude ``E`` V at ``w`` rad/s: its
+    current of magnitude ``m > ih`` solves ``(w L m)^2 + (R (m - ih))^2 = E^2`` and it
+    dissipates ``3/2 R (m - ih) m``."""
+    a, b, c = (w * L) ** 2 + R**2, -2 * R**2 * ih, (R * ih) ** 2 - E**2
+    m = (-b + np.sqrt(b * b - 4 * a * c)) / (2 * a)
+    return 1.5 * R * (m - ih) * m
 
 
 @dataclass(frozen=True)
