@@ -199,7 +199,10 @@ def _bridge(build: Build, spec: dict, lo: float, hi: float) -> dict:
     series with the rotor current, the stator's leakage linear: its saturable leakage ``L_b``
     and the linear rotor leakage are set so that the rotor leakage at ``lo`` is the motor's
     (a locked-rotor test at rated current measured it) and falls to ``size`` times that at
-    ``hi``: with ``phi(i) = i_k tanh(i/i_k)/i``, ``L_b = L (1 - size)/(phi(lo) - phi(hi))``."""
+    ``hi``: with ``phi(i) = i_k tanh(i/i_k)/i``, ``L_b = L (1 - size)/(phi(lo) - phi(hi))``. A
+    multi-loop rotor whose common path is shorter than ``L_b phi(lo)`` gets the bridge on top of
+    its ladder (``L_ladder``), ``L_b = L_ladder (1 - size)/(size phi(lo) - phi(hi))``: the ratio
+    is kept, the leakage at ``lo`` grows."""
     m = build.machine
     knee = spec["knee_fraction"] * build.motor.rated_current_peak
     phi_lo, phi_hi = (knee * math.tanh(i / knee) / i for i in (lo, hi))
@@ -209,9 +212,12 @@ def _bridge(build: Build, spec: dict, lo: float, hi: float) -> dict:
     if cage.n == 1:  # the linear leakage lives in the loop, the bridge in the common path
         lin = max(total - L_b * phi_lo, 0.02 * total)
         cage = RotorCage(cage.R, ((lin,),), LeakageCurve("bridge", 0.0, L_b, knee))
-    else:
-        lin = max(cage.common.L0 - L_b * phi_lo, 0.0)
-        cage = replace(cage, common=LeakageCurve("bridge", lin, L_b, knee))
+    elif cage.common.L0 >= L_b * phi_lo:  # the bridge replaces part of the common path
+        cage = replace(cage, common=LeakageCurve("bridge", cage.common.L0 - L_b * phi_lo, L_b, knee))
+    else:  # a deep rotor ladder leaves no room: the bridge comes on top, sized for the ratio
+        ladder = total - cage.common.L0
+        L_b = ladder * (1 - spec["size"]) / (spec["size"] * phi_lo - phi_hi)
+        cage = replace(cage, common=LeakageCurve("bridge", 0.0, L_b, knee))
     build.plant["rotor"] = cage
     Lr_lo, Lr_hi = (_rotor_leakage(cage, i) for i in (lo, hi))
     return {"achieved_size": Lr_hi / Lr_lo, "rotor_knee": knee, "bridge_leakage": L_b,

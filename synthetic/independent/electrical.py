@@ -26,8 +26,9 @@ below the coercive current ``i_h`` the winding's flux is held (the domain walls 
 beyond it the excess drives the eddy resistance. With the air-gap EMF ``e`` the current is
 ``i_h + |e|/R_fe`` along ``e``: the loss ``3/2 (i_h |e| + |e|^2/R_fe)`` is a hysteresis term
 proportional to frequency plus an eddy term proportional to its square (Steinmetz 1892;
-Bertotti, IEEE Trans. Magn. 24(1), 1988, without the excess term); ``i_h ~ |psi_fe|^(alpha-1)``
-gives the Steinmetz exponent ``alpha`` of the hysteresis loss per cycle. A flux left in the
+Bertotti, IEEE Trans. Magn. 24(1), 1988, without the excess term); ``i_h ~ |psi_m|^(alpha-1)``
+(``psi_m`` the main flux) gives the Steinmetz exponent ``alpha`` of the hysteresis loss per
+cycle. A flux left in the
 winding when the supply is removed is the iron's remanence.
 
 Torque on the rotor ``T = 3/2 p (psi_m x I_r)`` with the sign convention

@@ -76,8 +76,8 @@ def _rhs(t, x, dx, mode, va, vb, closed, arc, gp, n, el, stat, rot, mag, Rr, Lin
     cw[v] = va
     cw[v + 1] = vb
     ih = 0.0
-    if el[E_IH] > 0.0:  # Steinmetz iron loss: the coercive current at this flux
-        ih = el[E_IH] * (math.hypot(x[2 + 2 * n], x[3 + 2 * n]) / el[E_PSIREF]) ** (el[E_ALPHA] - 1.0)
+    if el[E_IH] > 0.0:  # Steinmetz iron loss: the coercive current at this main flux
+        ih = el[E_IH] * (math.hypot(cw[W_PSIM], cw[W_PSIM + 1]) / el[E_PSIREF]) ** (el[E_ALPHA] - 1.0)
     flux_derivatives(x, n, el[E_P] * x[b], va, vb, Rs, Rr, kr, el[E_RFE], ih, open_st, cw, dx)
     te = torque(el[E_P], cw)
     cw[v + 2] = te
