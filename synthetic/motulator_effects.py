@@ -184,8 +184,10 @@ def effect_specs(effects: dict | None, m: dict, exc: dict, duration: float) -> l
                 form["generator"] = generator(float(torque), w_sync, float(opts.get("emf", 200.0)),
                                               float(opts.get("armature_time_constant", 0.01)),
                                               float(opts.get("brush_drop", 1.5)), form["time"])
-            out.append({"name": name, "size": float(torque), "size_name": "load torque (at synchronous speed "
-                        "for quadratic and dc_generator)", "unit": "N m", "form": form, **held})
+            size_name = ("steady generator torque at synchronous speed" if kind == "dc_generator"
+                         else "load torque (at synchronous speed for quadratic)")
+            out.append({"name": name, "size": float(torque), "size_name": size_name, "unit": "N m", "form": form,
+                        **held})
     return out
 
 
