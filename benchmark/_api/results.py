@@ -96,6 +96,7 @@ class Identification:
         """The result as JSON (written to ``path`` too, when given)."""
         text = json.dumps(self.record, indent=2, default=_json_default) + "\n"
         if path is not None:
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
             Path(path).write_text(text, encoding="utf-8")
         return text
 
@@ -195,5 +196,6 @@ class Diagnosis:
         """The diagnosis as JSON (written to ``path`` too, when given)."""
         text = json.dumps(self.document, indent=2, default=_json_default) + "\n"
         if path is not None:
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
             Path(path).write_text(text, encoding="utf-8")
         return text
