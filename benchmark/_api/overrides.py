@@ -30,7 +30,7 @@ def override_value(value) -> str:
             return "nan"
         if math.isinf(value):
             return "inf" if value > 0 else "-inf"
-        return repr(value)
+        return repr(float(value))
     if isinstance(value, Path):
         value = str(value)
     if isinstance(value, str):

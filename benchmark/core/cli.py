@@ -61,8 +61,8 @@ def run_hydra_main(main, config_name: str, title: str, usage: Sequence[str], foo
     """Call a ``@hydra.main`` function whose primary configuration is ``conf/<config_name>.yaml``.
 
     ``--help`` prints the entry point's own help (:func:`benchmark.core.config_help.config_help`:
-    ``title``, ``usage`` lines, its keys, those of the groups in ``sections``, the groups, ``footer``). Before Hydra composes, the
-    overrides are checked (:func:`benchmark.core.config_files.compose_config`): a misspelt key or
+    ``title``, ``usage`` lines, its keys, those of the groups in ``sections``, the groups,
+    ``footer``). Before Hydra composes, the overrides are checked (:func:`benchmark.core.config_files.compose_config`): a misspelt key or
     option, with or without ``+``, is one line naming it and the nearest known one, exit status
     2; so are Hydra's own configuration errors. With ``IMBENCH_DEBUG=1`` Hydra shows its full
     stack traces too (``HYDRA_FULL_ERROR=1``)."""
