@@ -62,10 +62,11 @@ def run_hydra_main(main, config_name: str, title: str, usage: Sequence[str], foo
 
     ``--help`` prints the entry point's own help (:func:`benchmark.core.config_help.config_help`:
     ``title``, ``usage`` lines, its keys, those of the groups in ``sections``, the groups,
-    ``footer``). Before Hydra composes, the overrides are checked (:func:`benchmark.core.config_files.compose_config`): a misspelt key or
-    option, with or without ``+``, is one line naming it and the nearest known one, exit status
-    2; so are Hydra's own configuration errors. With ``IMBENCH_DEBUG=1`` Hydra shows its full
-    stack traces too (``HYDRA_FULL_ERROR=1``)."""
+    ``footer``). Before Hydra composes, the overrides are checked
+    (:func:`benchmark.core.config_files.compose_config`): a misspelt key or option, with or
+    without ``+``, is one line naming it and the nearest known one, exit status 2; so are
+    Hydra's own configuration errors. With ``IMBENCH_DEBUG=1`` Hydra shows its full stack
+    traces too (``HYDRA_FULL_ERROR=1``)."""
     if debug():
         os.environ.setdefault("HYDRA_FULL_ERROR", "1")
     from hydra._internal.utils import get_args_parser
