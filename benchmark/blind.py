@@ -18,8 +18,8 @@ from benchmark.core.config_files import CONFIG_DIR
 TITLE = ("imbench blind evaluation: draw data sets from one source, move each truth.yaml aside, diagnose\n"
          "the folder and score the verdicts (effect sets named, false alarms, pairs) against the truth.")
 USAGE = ("python -m benchmark.blind source=own|plant|motulator n=30 seed=S out=results/blind workdir=outputs/blind",)
-FOOTER = ("", "Every key of python -m benchmark.diagnose --help applies too (budget, diagnosis.*, candidates). "
-          "Scores: OUT/<source>/confusion.md; docs/diagnosis.md says how they are read.",)
+FOOTER = ("", "Every key of python -m benchmark.diagnose --help applies too (budget, diagnosis.*, candidates).",
+          "Scores: OUT/<source>/confusion.md; docs/diagnosis.md says how they are read.")
 
 
 @hydra.main(version_base="1.3", config_path=str(CONFIG_DIR), config_name="blind")

@@ -26,8 +26,8 @@ TITLE = ("imbench diagnosis: where the identified model misses the data, which u
 USAGE = ("python -m benchmark.diagnose data.path=DIR                      a data folder (measured or foreign)",
          "python -m benchmark.diagnose 'effects=[double_cage]' noise=noisy  a synthetic plant with an effect",
          "python -m benchmark.diagnose data.path=DIR 'candidates=[double_cage,load_torque]'  fewer candidates")
-FOOTER = ("", "Writes diagnosis.json, diagnosis.md and figures into the run folder (hydra.run.dir=...). "
-          "How it decides: docs/diagnosis.md.",)
+FOOTER = ("", "Writes diagnosis.json, diagnosis.md and figures into the run folder (hydra.run.dir=...).",
+          "How it decides: docs/diagnosis.md.")
 
 
 @hydra.main(version_base="1.3", config_path=str(CONFIG_DIR), config_name="diagnose")

@@ -22,6 +22,8 @@ _KEY_LINE = re.compile(r"^(?P<indent> *)(?P<key>[A-Za-z_][\w]*):(?P<rest>.*)$")
 #: Keys that describe a file, not a setting (a problem's ``name``, the data kind it reads).
 _NOT_SETTINGS = ("name", "data_kind", "defaults", "hydra", "_target_", "_partial_")
 WIDTH = 34
+#: Longest line of a help text.
+LINE = 110
 
 
 def key_comments(path: Path) -> dict[str, str]:
@@ -47,11 +49,11 @@ def key_comments(path: Path) -> dict[str, str]:
         text = inline or " ".join(block)
         block = []
         if text:
-            out[dotted] = _first_sentence(text)
+            out[dotted] = text
     return out
 
 
-def _first_sentence(text: str, limit: int = 76) -> str:
+def _first_sentence(text: str, limit: int) -> str:
     text = " ".join(text.split())
     cut = re.search(r"(?<=[a-z0-9)])\. (?=[A-Z(])", text)
     text = text[: cut.start() + 1] if cut else text
@@ -130,13 +132,14 @@ def _lines(keys, comments: dict[str, str], strip: str = "", where: str = "") -> 
             if head not in done:
                 done.add(head)
                 pairs = [f"{d.rpartition('.')[2]}={v}" for d, v in heads[head]]
-                out += textwrap.wrap(f"{head}.{{{', '.join(pairs)}}}", 108, initial_indent="  ",
+                note = f" (each explained in {where})" if where else ""
+                out += textwrap.wrap(f"{head}.{{{', '.join(pairs)}}}{note}", 108, initial_indent="  ",
                                      subsequent_indent="      ", break_on_hyphens=False)
-                out[-1] += f"   (each explained in {where})" if where else ""
             continue
-        doc = comments.get(dotted[len(strip):], "")
         text = f"  {dotted}={default}"
-        out.append(f"{text:<{WIDTH}} {doc}".rstrip() if len(text) < WIDTH else f"{text}  {doc}".rstrip())
+        text = f"{text:<{WIDTH}} " if len(text) < WIDTH else f"{text}  "
+        doc = _first_sentence(comments.get(dotted[len(strip):], ""), LINE - len(text))
+        out.append((text + doc).rstrip() if len(doc) > 10 or not doc else text.rstrip())
     return out
 
 
