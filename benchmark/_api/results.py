@@ -15,8 +15,27 @@ import pandas as pd
 from benchmark.core.harness import _json_default, format_table
 
 
+class _Document:
+    """``to_dict``/``to_json`` of a result whose whole record is the JSON document the command line writes."""
+
+    def _document(self) -> dict:
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        """The result as plain Python values (the ``result.json`` / ``diagnosis.json`` document)."""
+        return json.loads(self.to_json())
+
+    def to_json(self, path=None) -> str:
+        """The result as JSON (written to ``path`` too, when given)."""
+        text = json.dumps(self._document(), indent=2, default=_json_default) + "\n"
+        if path is not None:
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
+            Path(path).write_text(text, encoding="utf-8")
+        return text
+
+
 @dataclass
-class Identification:
+class Identification(_Document):
     """One identification: the estimate, how sure it is, and how well it fits.
 
     Attributes
@@ -88,17 +107,8 @@ class Identification:
         """The table the command line prints: parameter, unit, estimate, truth, error, standard error."""
         return format_table(self.record)
 
-    def to_dict(self) -> dict:
-        """The result as plain Python values (the ``result.json`` document)."""
-        return json.loads(self.to_json())
-
-    def to_json(self, path=None) -> str:
-        """The result as JSON (written to ``path`` too, when given)."""
-        text = json.dumps(self.record, indent=2, default=_json_default) + "\n"
-        if path is not None:
-            Path(path).parent.mkdir(parents=True, exist_ok=True)
-            Path(path).write_text(text, encoding="utf-8")
-        return text
+    def _document(self) -> dict:
+        return self.record
 
     def figures(self) -> dict:
         """The run's figures, drawn now: ``{name: matplotlib Figure}`` (measured and simulated
@@ -142,7 +152,7 @@ class Identification:
 
 
 @dataclass
-class Diagnosis:
+class Diagnosis(_Document):
     """Why the identified model still misses the data.
 
     Attributes
@@ -188,14 +198,6 @@ class Diagnosis:
     def __str__(self) -> str:
         return self.report
 
-    def to_dict(self) -> dict:
-        """The diagnosis as plain Python values (the ``diagnosis.json`` document)."""
-        return json.loads(self.to_json())
+    def _document(self) -> dict:
+        return self.document
 
-    def to_json(self, path=None) -> str:
-        """The diagnosis as JSON (written to ``path`` too, when given)."""
-        text = json.dumps(self.document, indent=2, default=_json_default) + "\n"
-        if path is not None:
-            Path(path).parent.mkdir(parents=True, exist_ok=True)
-            Path(path).write_text(text, encoding="utf-8")
-        return text
