@@ -1,4 +1,4 @@
-"""``python -m synthetic``: write a synthetic data set (the README's Data sets) and its truth.yaml.
+"""``python -m synthetic``: write a synthetic data set (docs/data_format.md) and its truth.yaml.
 
 Examples::
 

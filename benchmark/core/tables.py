@@ -1,4 +1,4 @@
-"""Reading and writing the data-set folders of the README's Data sets, with validation.
+"""Reading and writing the data-set folders of docs/data_format.md, with validation.
 
 Every problem found in a file is raised as :class:`benchmark.core.errors.DataError` naming the
 file, the column and the row (1-based data row, the header being row 0, so row ``n`` is line
@@ -143,7 +143,7 @@ def read_meta(folder: Path, required: dict[str, type | tuple[type, ...]]) -> dic
         raise DataError(folder, "data set folder does not exist" if not folder.exists()
                         else "is not a folder: data.path names a data set folder (meta.yaml + CSV tables)")
     if not path.exists():
-        raise DataError(path, "missing: every data set folder needs a meta.yaml (the README's Data sets)")
+        raise DataError(path, "missing: every data set folder needs a meta.yaml (docs/data_format.md)")
     meta = read_yaml(path)
     if not isinstance(meta, dict):
         raise DataError(path, f"must be a mapping of keys to values, got {type(meta).__name__}")

@@ -446,7 +446,7 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
 
 
 def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
-    """Paper conditioning of the start-up speed (optional, see README): zero-phase low-pass."""
+    """Paper conditioning of the start-up speed (optional, docs/time_domain.md): zero-phase low-pass."""
     if not speed_filter:
         return ds
     from dataclasses import replace
