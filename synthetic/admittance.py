@@ -1,4 +1,4 @@
-"""Synthetic Lindsay-Barton slip sweeps (the README's data sets, kind ``admittance``).
+"""Synthetic Lindsay-Barton slip sweeps (docs/data_format.md, kind ``admittance``).
 
 The bench: the machine is held by a speed-controlled work machine and ramped at
 ``test.ramp_rpm_per_s`` from ``speed_start_rpm`` to ``speed_stop_rpm`` at constant phase voltage,

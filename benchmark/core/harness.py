@@ -29,6 +29,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from benchmark.core.budget import BudgetedProblem, run_plugin
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
 from benchmark.core.io import write_table_atomic, write_text_atomic
@@ -122,7 +123,7 @@ def validate_config(cfg: DictConfig) -> None:
 
 #: The primary configuration of ``python -m benchmark``: its top-level keys are the only ones a
 #: run accepts (a misspelt ``+seeed=1`` would otherwise run silently with seed 0).
-PRIMARY_CONFIG = Path(__file__).resolve().parents[2] / "conf" / "config.yaml"
+PRIMARY_CONFIG = CONFIG_DIR / "config.yaml"
 
 
 def known_top_level_keys() -> list[str]:
@@ -375,6 +376,7 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "searched": None if x_best is None else dict(zip(problem.parameter_names, map(float, x_best),
                                                          strict=True)),
         "estimate": estimate,
+        "units": None if estimate is None else {k: problem.units.get(k, "") for k in estimate},
         "truth": truth,
         "rel_error": rel_error,
         # uncertainty of the searched parameters at the final point (benchmark.core.quality)
@@ -463,15 +465,15 @@ def _json_default(o):
 
 
 def format_table(record: dict) -> str:
-    """The short table printed after a run: parameter, estimate, truth, error."""
+    """The short table printed after a run: parameter, unit, estimate, truth, error, standard error."""
     est, truth, err = record["estimate"] or {}, record["truth"] or {}, record["rel_error"] or {}
-    se = record.get("standard_error") or {}
-    lines = [f"{'parameter':<10}{'estimate':>14}{'truth':>14}{'error':>10}{'std err':>12}"]
+    se, units = record.get("standard_error") or {}, record.get("units") or {}
+    lines = [f"{'parameter':<10}{'unit':<11}{'estimate':>12}{'truth':>14}{'error':>10}{'std err':>12}"]
     for k, v in est.items():
         t = f"{truth[k]:14.6g}" if k in truth else f"{'-':>14}"
         e = f"{100 * err[k]:+9.3f}%" if k in err else f"{'-':>10}"
         s = f"{se[k]:12.3g}" if se.get(k) is not None else f"{'-':>12}"
-        lines.append(f"{k:<10}{v:14.6g}{t}{e}{s}")
+        lines.append(f"{k:<10}{units.get(k) or '-':<11}{v:12.6g}{t}{e}{s}")
     cost = record["cost"]
     lines.append(
         f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}, "

@@ -1,4 +1,4 @@
-"""The admittance data set (``kind: admittance``, the README's Data sets): read, validate, write.
+"""The admittance data set (``kind: admittance``, docs/data_format.md): read, validate, write.
 
 Folder layout
 -------------
@@ -193,7 +193,7 @@ def load_admittance(folder) -> AdmittanceData:
 
     files = sorted(folder.glob("sweep*.csv"))
     if not files:
-        raise DataError(folder, "no sweep*.csv table found (the README's Data sets, kind admittance)")
+        raise DataError(folder, "no sweep*.csv table found (docs/data_format.md, kind admittance)")
     parts = {k: [] for k in ("slip", "G", "B", "voltage", "time", "torque", "sweep")}
     has = {"time": None, "torque": None}
     for k, path in enumerate(files):

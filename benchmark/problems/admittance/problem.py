@@ -99,6 +99,8 @@ class AdmittanceProblem(Problem):
     """
 
     name = "admittance"
+    #: Per-phase circuit elements, ohm (reactances at the test frequency); R1 and R1sigma split R1_total.
+    units = {n: "ohm" for n in (*NAMES_8, "R1", "R1sigma")}
     #: the data set's truth document (truth.yaml or the in-memory one), for scoring scripts only
     truth_document: dict | None = None
 

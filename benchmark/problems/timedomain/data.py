@@ -1,4 +1,4 @@
-"""Time-domain data sets (``kind: startup``, the README's Data sets): load, validate, write.
+"""Time-domain data sets (``kind: startup``, docs/data_format.md): load, validate, write.
 
 A folder holds ``meta.yaml``, one or more ``startup*.csv`` and optionally ``stop*.csv``.
 Start-up columns: ``t``; voltages ``v_alpha, v_beta`` or phase ``v_r, v_s, v_t``; currents

@@ -34,7 +34,7 @@ from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config:
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.filters import zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
-from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
+from benchmark.problems.timedomain.motor import PARAMETER_NAMES, PARAMETER_UNITS, coefficients
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
@@ -61,7 +61,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
 
     name = "timedomain"
     #: Units of the parameters (messages and report).
-    units = {"Rs": "ohm", "Ls": "H", "Le": "H", "Rr": "ohm", "J": "kg m^2", "fv": "N m s/rad", "fc": "N m"}
+    units = PARAMETER_UNITS
 
     def __init__(self, dataset: StartupDataset, lower, upper, mechanical: MechanicalEstimate | None = None,
                  inertia: float | None = None, exponent: int = 1, weights=(1.0, 1.0, 0.5),
@@ -446,7 +446,7 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
 
 
 def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
-    """Paper conditioning of the start-up speed (optional, see README): zero-phase low-pass."""
+    """Paper conditioning of the start-up speed (optional, docs/time_domain.md): zero-phase low-pass."""
     if not speed_filter:
         return ds
     from dataclasses import replace

@@ -24,6 +24,7 @@ from benchmark.core.io import write_text_atomic
 from benchmark.core.nuisance import refine_nuisance
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, diagnose
+from benchmark.problems.timedomain.motor import PARAMETER_UNITS
 from benchmark.problems.timedomain.problem import problem_from_dataset
 from benchmark.problems.timedomain.settings import TimeDomainSettings
 
@@ -198,6 +199,16 @@ def render_markdown(doc: dict) -> str:
         for pe in doc["per_effect"]:
             par = ", ".join(f"{k} = {v['value']:.4g} +- {v['standard_error']:.2g}" for k, v in pe["parameters"].items())
             lines.append(f"| {pe['effect']} | {100 * pe['drop_one_share']:.0f} % | {par} |")
+        lines.append("")
+    base = doc.get("base") or {}
+    if base.get("estimate"):
+        se, first = base.get("standard_errors") or {}, base.get("identification") or {}
+        lines += ["| base model parameter | unit | in the final model (+- standard error) | identified alone |",
+                  "|---|---|---|---|"]
+        for k, v in base["estimate"].items():
+            value = f"{v:.5g}" + (f" +- {se[k]:.2g}" if se.get(k) is not None else "")
+            alone = f"{first[k]:.5g}" if k in first else "-"
+            lines.append(f"| {k} | {PARAMETER_UNITS.get(k, '-')} | {value} | {alone} |")
         lines.append("")
     for group in doc["indistinguishable"]:
         lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")
