@@ -49,7 +49,7 @@ def test_help_names_its_own_keys(module, capsys):
 
 def test_the_help_follows_the_choices_on_the_command_line(capsys):
     _, out, _ = _run_module("benchmark", ["problem=admittance", "optimizer=genesis", "--help"], capsys)
-    assert "problem.{model=8" in out and "optimizer.plugin.{population_size=100" in out
+    assert "problem.{model=auto" in out and "optimizer.plugin.{population_size=100" in out
     assert "optimizer  cmaes" in out and "genesis*" in out
     assert "problem.stator_resistance=free" not in out
     assert set(config_groups()) == {"experiment", "motor", "noise", "optimizer", "problem"}
