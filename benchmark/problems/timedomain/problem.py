@@ -35,6 +35,7 @@ from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.filters import zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
+from benchmark.problems.timedomain.noise import record_noise
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
@@ -176,56 +177,15 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
     # -- noise, fit quality and warnings (benchmark.core.quality) ----------------------------
     def channel_noise(self) -> list[list]:
         """Per record, the noise estimate (:class:`benchmark.core.noise_estimates.NoiseEstimate`) of
-        i_alpha, i_beta and speed (None where not measured or not estimable), from the data alone:
-        a constant + linear trend + every harmonic of the supply frequency below Nyquist (at most
-        200) fitted over the last
-        quarter of the record (the steady state after the start; coloured noise stays in the
-        residual). Where that quarter holds fewer than ``2 * PERIODS_PER_BLOCK`` supply periods
-        (a short record), the diagnosis's estimate (:func:`~benchmark.problems.timedomain.
-        diagnosis.noise.startup_noise`: the pre-trigger, else the supply's harmonics with
-        drifting amplitudes over the steady state). A smoothing fit of a current is no noise
-        estimate: at 1 kHz on a 60 Hz supply a 21-sample window spans more than a period, and on
-        an independent-plant start of 0.4 s it put the current noise at 36 A (the truth: 0.17 A),
-        so the fit quality read "below the noise level". A noise-free record gets a floor of 1e-7
-        of the channel's RMS."""
-        if self._noise is not None:
-            return self._noise
-        from benchmark.core.noise_estimates import NoiseEstimate
-        from benchmark.problems.timedomain.diagnosis.noise import startup_noise
-
-        fs = 1.0 / self.dataset.sample_time
-        out = []
-        for (v_a, v_b, i_a, i_b, w) in self._records:
-            n = len(i_a)
-            tail = slice(int(0.75 * n), n)
-            f0 = _supply_frequency(v_a[tail], v_b[tail], self.dataset.sample_time) or self.dataset.supply_frequency
-            short: dict | None = None
-            ests = []
-            for c, x in enumerate((i_a, i_b, w)):
-                if c == 2 and not self.speed_measured:
-                    ests.append(None)
-                    continue
-                est = None
-                try:
-                    if f0 and f0 > 0 and (n - tail.start) * f0 / fs >= 2 * PERIODS_PER_BLOCK:
-                        est = _blockwise_periodic_noise(x[tail], fs, f0)
-                except (ValueError, np.linalg.LinAlgError, FloatingPointError):
-                    est = None
-                if est is None:
-                    if short is None:
-                        short = startup_noise(np.arange(n) / fs, v_a, v_b, i_a, i_b,
-                                              w if self.speed_measured else None,
-                                              float(f0 or self.dataset.supply_frequency))
-                    est = short.get(("i_alpha", "i_beta", "speed")[c])
-                if est is not None:
-                    floor = 1e-7 * float(np.sqrt(np.mean(x**2)))
-                    if not est.std > floor:
-                        est = NoiseEstimate(floor, est.rel_uncertainty, est.n_effective,
-                                            est.method + " (noise-free record: floor 1e-7 of the channel RMS)")
-                ests.append(est)
-            out.append(ests)
-        self._noise = out
-        return out
+        i_alpha, i_beta and speed (None where not measured), from the data alone: the one estimate
+        of :func:`benchmark.problems.timedomain.noise.record_noise` that the diagnosis uses too (a
+        quiet pre-trigger, else the steady state's supply harmonics with drifting amplitudes;
+        quantised channels at least ``q / sqrt(12)``; coloured noise and the estimate's own
+        uncertainty allowed for)."""
+        if self._noise is None:
+            self._noise = [[record_noise(r, self.dataset.supply_frequency)[0].get(c) for c in WEIGHT_KEYS]
+                           for r in self.dataset.startups]
+        return self._noise
 
     def hac_bandwidth_floor(self) -> float:
         """Smallest Bartlett bandwidth (samples) of the HAC covariance: one supply period
@@ -365,34 +325,6 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             if self.stator_resistance == "fixed":
                 d["Rs_fixed"] = float(self.rs_dc)
         return d
-
-
-#: Supply periods per block of the blockwise periodic noise estimate.
-PERIODS_PER_BLOCK = 4
-
-
-def _blockwise_periodic_noise(x, fs: float, f0: float):
-    """Noise of a nearly periodic segment: :func:`benchmark.core.noise_estimates.noise_from_periodic`
-    (constant, trend, every harmonic below Nyquist up to 200) on consecutive blocks of
-    ``PERIODS_PER_BLOCK`` supply periods, pooled (variances weighted by their degrees of
-    freedom). Short blocks follow a slowly changing amplitude (a start that has not quite
-    settled) that one fit over the whole segment would count as noise."""
-    from benchmark.core.noise_estimates import NoiseEstimate, noise_from_periodic, refine_frequency
-
-    x = np.asarray(x, float)
-    nh = min(200, int(0.5 * fs / f0))
-    f = refine_frequency(x, fs, f0, min(nh, 10))
-    block = int(round(PERIODS_PER_BLOCK * fs / f))
-    ests = [noise_from_periodic(x[a:a + block], fs, f, n_harmonics=nh, refine_f0=False)
-            for a in range(0, len(x) - block + 1, block)]
-    if not ests:
-        raise ValueError("segment shorter than one block")
-    dof = np.array([e.n_effective for e in ests])
-    var = float(np.sum(dof * np.array([e.std**2 for e in ests])) / np.sum(dof))
-    n_eff = float(np.sum(dof))
-    return NoiseEstimate(math.sqrt(var), 1.0 / math.sqrt(2 * n_eff), n_eff,
-                         f"periodic fit ({f:.4f} Hz, {nh} harmonics) on {len(ests)} blocks of "
-                         f"{PERIODS_PER_BLOCK} periods")
 
 
 def _supply_frequency(v_a, v_b, dt: float) -> float | None:

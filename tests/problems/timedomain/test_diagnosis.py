@@ -16,7 +16,7 @@ from scipy import optimize
 
 from benchmark.core.effects import EffectContext, effect_context, load_effects
 from benchmark.core.uncertainty import misfit_ratio
-from benchmark.problems.timedomain.diagnosis.noise import startup_noise
+from benchmark.problems.timedomain.noise import startup_noise
 from benchmark.problems.timedomain.diagnosis.pipeline import STATUSES, screen
 from benchmark.problems.timedomain.extended import IDX, base_row, simulate_extended_batch
 from benchmark.problems.timedomain.motor import coefficients

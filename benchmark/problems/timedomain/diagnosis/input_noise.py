@@ -32,7 +32,7 @@ import numpy as np
 
 from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
-from benchmark.problems.timedomain.diagnosis.noise import voltage_noise
+from benchmark.problems.timedomain.noise import voltage_noise
 
 #: Noise realisations added to the voltages.
 REALISATIONS = 8
