@@ -90,7 +90,7 @@ def quantisation_cells(x: np.ndarray, q: float) -> float:
     return float(1.0 / np.sum(w**2))
 
 
-def _floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
+def floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
     """``est`` raised to ``floor`` and to the quantisation noise ``q / sqrt(12)`` of the whole
     channel ``x``: the grid is found on the whole record, not on the stretch the noise came
     from. A coarse speed step with little dither sits on one or two levels at standstill and at
@@ -119,7 +119,7 @@ def _floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
 
 def fallback(x: np.ndarray, floor: float, why: str) -> NoiseEstimate:
     n = max(len(x) - 4, 1)
-    return _floored(NoiseEstimate(fourth_difference(x), FALLBACK_REL_UNCERTAINTY, float(n),
+    return floored(NoiseEstimate(fourth_difference(x), FALLBACK_REL_UNCERTAINTY, float(n),
                                   f"fourth differences ({why})"), x, floor)
 
 
@@ -293,7 +293,7 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
         for ch, x in chans.items():
             floor = i_floor if ch != "speed" else NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
             try:
-                out[ch] = _floored(noise_from_quiet(x[:k_quiet]), x, floor)
+                out[ch] = floored(noise_from_quiet(x[:k_quiet]), x, floor)
             except ValueError:
                 out[ch] = fallback(x, floor, "pre-trigger too short")
         return out
@@ -316,13 +316,13 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
                     est = NoiseEstimate(local.std, max(local.rel_uncertainty, UNSETTLED_REL_UNCERTAINTY),
                                         local.n_effective,
                                         local.method + "; the record ends before a steady state")
-            out[ch] = _floored(est, chans[ch], i_floor)
+            out[ch] = floored(est, chans[ch], i_floor)
         except (ValueError, np.linalg.LinAlgError) as exc:
             out[ch] = fallback(chans[ch], i_floor, str(exc))
     if has_speed:
         floor = NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
         try:
-            out["speed"] = _floored(steady_speed_noise(speed[k_ss:], fs, f0), speed, floor)
+            out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0), speed, floor)
         except ValueError as exc:
             out["speed"] = fallback(speed, floor, str(exc))
     return out
@@ -349,45 +349,13 @@ def steady_speed_noise(x: np.ndarray, fs: float, f0: float) -> NoiseEstimate:
     return est
 
 
-def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
-                  supply_frequency: float) -> tuple[dict[str, NoiseEstimate], dict[str, np.ndarray]]:
-    """Noise of measured continuous voltages ``v_alpha``, ``v_beta`` (V), found as the currents'
-    is: the pre-trigger's spread where there is one, else what the drifting-harmonics fit of the
-    steady state leaves (the grid's harmonics, unbalance and slow dips are signal, not noise).
-    Also returns that noise itself (the quiet segment less its mean, or the fit's residual),
-    whose spectrum, not only its spread, decides what it does to the model (empty when the
-    fourth-difference fallback was used)."""
-    n = len(t)
-    fs = 1.0 / float(np.median(np.diff(t)))
-    v_floor = 1e-5 * float(np.max(np.hypot(v_alpha, v_beta)))
-    chans = {"v_alpha": np.asarray(v_alpha, float), "v_beta": np.asarray(v_beta, float)}
-    k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
-    out: dict[str, NoiseEstimate] = {}
-    templates: dict[str, np.ndarray] = {}
-    has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
-    k_ss = steady_start(speed if has_speed else None, n, max(int(fs / supply_frequency), 1))
-    for ch, x in chans.items():
-        try:
-            if k_quiet >= MIN_QUIET:
-                out[ch] = _floored(noise_from_quiet(x[:k_quiet]), x[:k_quiet], v_floor)
-                templates[ch] = x[:k_quiet] - np.mean(x[:k_quiet])
-                continue
-            if (n - k_ss) / fs * supply_frequency < 2:
-                raise ValueError("steady state shorter than two periods")
-            est, templates[ch] = modulated_periodic_noise(x[k_ss:], fs, supply_frequency)
-            out[ch] = _floored(est, x[k_ss:], v_floor)
-        except (ValueError, np.linalg.LinAlgError) as exc:
-            out[ch] = fallback(x, v_floor, str(exc))
-    return out, templates
-
-
 def stop_noise(speed: np.ndarray, w0: float) -> NoiseEstimate:
     """Noise of a stop record's free motion ``speed`` (rad/s, from the speed ``w0``): a smooth
     fit's residual, floored as the start-up's channels."""
     floor = NOISE_FREE_FLOOR * max(w0, 1e-9)
     window = int(min(51, len(speed) // 3)) | 1
     try:
-        return _floored(noise_from_smooth(speed, window), speed, floor)
+        return floored(noise_from_smooth(speed, window), speed, floor)
     except ValueError as exc:
         return fallback(speed, floor, str(exc))
 

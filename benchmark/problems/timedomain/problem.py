@@ -35,7 +35,7 @@ from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.filters import zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
-from benchmark.problems.timedomain.noise import record_noise
+from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
@@ -208,20 +208,46 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             out.append(("Rs prior", offset, offset + 1))
         return out
 
+    def noise_levels(self, x) -> list[dict]:
+        """Per record, ``{channel: NoiseEstimate}`` of the residual at ``x``: :meth:`channel_noise`,
+        and for measured continuous voltages (``input_hold: linear``) each channel raised by the
+        voltage's own noise carried through the model at ``x``
+        (:func:`benchmark.problems.timedomain.voltage_noise.with_propagated_voltage_noise`, as
+        the diagnosis does: the motor saw the clean voltage, the model the noisy one)."""
+        levels = [{k: est for k, est in zip(WEIGHT_KEYS, per_record, strict=True) if est is not None}
+                  for per_record in self.channel_noise()]
+        if not self._linear:
+            return levels
+        from benchmark.problems.timedomain.voltage_noise import with_propagated_voltage_noise
+
+        coef = coefficients(self.full_parameters(np.asarray(x, float)[None, :]), self.dataset.pole_pairs)
+        out = []
+        for noise, rec, (v_a, v_b, *_) in zip(levels, self.dataset.startups, self._records, strict=True):
+            def simulate(va, vb, noise=noise):
+                y = startup_outputs_batch(coef, np.ascontiguousarray(va), np.ascontiguousarray(vb), True,
+                                          self.dataset.sample_time, float(self.dataset.pole_pairs))[0]
+                return {k: y[c] for c, k in enumerate(WEIGHT_KEYS) if k in noise}
+
+            speed = rec.speed if rec.has_speed else None
+            out.append(with_propagated_voltage_noise(noise, simulate, rec.t, v_a, v_b, rec.i_alpha, rec.i_beta,
+                                                     speed, float(self.dataset.supply_frequency or
+                                                                  supply_frequency_of(rec.t, v_a, v_b)))[0])
+        return out
+
     def fit_channels(self, x) -> list[tuple]:
-        """(channel, held-in residual ``measured - simulated`` in A or rad/s, noise estimate) of
-        every measured, weighted channel at ``x``."""
+        """(channel, held-in residual ``measured - simulated`` in A or rad/s, noise estimate of
+        :meth:`noise_levels`) of every measured, weighted channel at ``x``."""
         sims = self.simulate(np.asarray(x, float)[None, :])
         out = []
-        for j, (sim, rec, noise, used) in enumerate(zip(sims, self._records, self.channel_noise(),
+        for j, (sim, rec, noise, used) in enumerate(zip(sims, self._records, self.noise_levels(x),
                                                         self._current_used, strict=True)):
             for c, key in enumerate(WEIGHT_KEYS):
-                if self.weights[c] == 0 or noise[c] is None:
+                if self.weights[c] == 0 or key not in noise:
                     continue
                 r = rec[2 + c] - sim[0, c]
                 if c < 2 and used is not None:  # masked current samples are not part of the fit
                     r = r[used]
-                out.append((key if len(self._records) == 1 else f"{key}[{j}]", r, noise[c]))
+                out.append((key if len(self._records) == 1 else f"{key}[{j}]", r, noise[key]))
         return out
 
     #: Rs departing from the DC resistance by more than this (relative) is reported.

@@ -66,8 +66,8 @@ from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
-from benchmark.problems.timedomain.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
+from benchmark.problems.timedomain.noise import combined
 
 __all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "estimated_rated_torque",
            "friction_scale", "held_by_base", "localise", "pullout_torque", "rated_torque", "screen", "verdict_of"]
