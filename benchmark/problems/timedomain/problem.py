@@ -114,6 +114,9 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         self._current_used = [None if r.weight is None else np.ascontiguousarray(np.asarray(r.weight, bool))
                               for r in dataset.startups]
         self._noise = None  # per-channel noise estimates, made on first use (see channel_noise)
+        # what the problem was made from (problem_from_dataset): settings and the loaded data set
+        self.settings: TimeDomainSettings | None = None
+        self.loaded_dataset: StartupDataset | None = None
         self._prior_scale = None
         self._init_switch_on_flux()
 
@@ -250,6 +253,29 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
                 out.append((key if len(self._records) == 1 else f"{key}[{j}]", r, noise[key]))
         return out
 
+    def second_look(self, x, identify, seed: int) -> dict | None:
+        """The identification's second look (:func:`benchmark.core.review.review`, called where the
+        fit at ``x`` misses the data): the stop record's check
+        (:func:`benchmark.problems.timedomain.stop_record.stop_record_check`, the diagnosis's
+        too). Returns ``{"record", "lines", "problem", "identification"}``, the last two the
+        start-up-alone problem and its identification (``identify(problem, seed=...)``) when the
+        stop record is set aside, else None; None when there is no check to make."""
+        from types import SimpleNamespace
+
+        from benchmark.problems.timedomain.stop_record import stop_record_check, stop_record_lines
+
+        if self.settings is None:
+            return None
+        check = stop_record_check(self.settings, self.loaded_dataset, self, SimpleNamespace(x=np.asarray(x, float)),
+                                  identify, seed)
+        if check is None:
+            return None
+        record, alone, ident_alone = check
+        aside = not record["used"]
+        alone.truth = self.truth  # (scoring only)
+        return {"record": record, "lines": stop_record_lines(record, "the identification uses"),
+                "problem": alone if aside else None, "identification": ident_alone if aside else None}
+
     #: Rs departing from the DC resistance by more than this (relative) is reported.
     RS_DC_TOLERANCE = 0.20
 
@@ -372,6 +398,7 @@ def setup_problem(settings: TimeDomainSettings, dataset: StartupDataset, truth_d
 
 def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth: dict | None) -> TimeDomainProblem:
     """Conditioning, mechanical pre-identification from the stop record, bounds, and the problem."""
+    loaded = ds
     ds = condition(ds, speed_filter=settings.speed_filter)
     mechanical = None
     if ds.stops:
@@ -389,7 +416,7 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
     names = ([] if settings.stator_resistance == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
         (["J"] if inertia is None else []) + ([] if mechanical or held is not None else ["fv", "fc"])
     bounds = choose_bounds(settings, names, ds)
-    return TimeDomainProblem(
+    problem = TimeDomainProblem(
         ds,
         lower=[bounds[n][0] for n in names],
         upper=[bounds[n][1] for n in names],
@@ -401,6 +428,8 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         stator_resistance=settings.stator_resistance,
         held_friction=held,
     )
+    problem.settings, problem.loaded_dataset = settings, loaded
+    return problem
 
 
 def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
