@@ -26,7 +26,8 @@ current at rest), every channel's noise is the spread of that quiet segment
 Segments too short for these fall back to a fourth-difference estimate (white noise only),
 with a 20 % relative uncertainty. A quantised channel's noise is at least ``q / sqrt(12)``,
 ``q`` the grid step found on the whole channel (:func:`quantum`), and a noise-free channel's
-is 1e-4 of its peak (:data:`NOISE_FREE_FLOOR`).
+is 1e-4 of its peak for a current, 1e-5 for a speed (:data:`NOISE_FREE_FLOOR`,
+:data:`SPEED_NOISE_FREE_FLOOR`).
 """
 
 from __future__ import annotations
@@ -50,9 +51,12 @@ from benchmark.core.noise_estimates import (
 FALLBACK_REL_UNCERTAINTY = 0.2
 #: A pre-trigger needs at least this many samples.
 MIN_QUIET = 48
-#: The noise of a channel is at least this share of its peak (a noise-free synthetic record:
+#: The noise of a current is at least this share of its peak (a noise-free synthetic record:
 #: a 14-bit converter's resolution; below it no record is measured).
 NOISE_FREE_FLOOR = 1e-4
+#: ... and a speed's at least this share of its peak: an encoder or tachometer resolves finer (the
+#: independent plant's 0.02 rad/s on a 3000 rpm motor is 6e-5 of it, which 1e-4 raised by a quarter).
+SPEED_NOISE_FREE_FLOOR = 1e-5
 
 
 def fourth_difference(x: np.ndarray) -> float:
@@ -291,7 +295,7 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
         chans["speed"] = speed
     if k_quiet >= MIN_QUIET:
         for ch, x in chans.items():
-            floor = i_floor if ch != "speed" else NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
+            floor = i_floor if ch != "speed" else SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
             try:
                 out[ch] = floored(noise_from_quiet(x[:k_quiet]), x, floor)
             except ValueError:
@@ -320,7 +324,7 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
         except (ValueError, np.linalg.LinAlgError) as exc:
             out[ch] = fallback(chans[ch], i_floor, str(exc))
     if has_speed:
-        floor = NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
+        floor = SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
         try:
             out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0), speed, floor)
         except ValueError as exc:
@@ -352,7 +356,7 @@ def steady_speed_noise(x: np.ndarray, fs: float, f0: float) -> NoiseEstimate:
 def stop_noise(speed: np.ndarray, w0: float) -> NoiseEstimate:
     """Noise of a stop record's free motion ``speed`` (rad/s, from the speed ``w0``): a smooth
     fit's residual, floored as the start-up's channels."""
-    floor = NOISE_FREE_FLOOR * max(w0, 1e-9)
+    floor = SPEED_NOISE_FREE_FLOOR * max(w0, 1e-9)
     window = int(min(51, len(speed) // 3)) | 1
     try:
         return floored(noise_from_smooth(speed, window), speed, floor)
