@@ -3,7 +3,7 @@
 command it suggests is complete: copied from the warning and run as it stands (the diagnosis
 with a few overrides appended that keep it cheap), it runs.
 
-* The paper's exact synthetic record and DEAP stopped after 1500 evaluations: the misfit is the
+* The paper's exact synthetic record and DEAP stopped after 600 evaluations: the misfit is the
   optimiser's (a polish from its result, and the true parameters, cost far less); the warning
   says "stopped short" and suggests the same run with a polish, which then converges at the noise
   level.
@@ -44,15 +44,15 @@ def _warnings(outdir: Path) -> list[str]:
 
 
 def test_a_ga_that_stopped_short_is_called_that_and_its_command_runs(tmp_path):
-    out = _run(["python", "-m", "benchmark", "optimizer=deap", "budget=1500", *FAST, f"hydra.run.dir={tmp_path / 'ga'}"],
-               tmp_path)
+    ga = ["python", "-m", "benchmark", "optimizer=deap", "budget=600", *FAST]
+    out = _run(ga + [f"hydra.run.dir={tmp_path / 'ga'}"], tmp_path)
     assert out.returncode == 0, out.stderr
     w = _warnings(tmp_path / "ga")
     short = [s for s in w if s.startswith("the optimiser stopped short")]
     assert len(short) == 1 and not any(s.startswith("the model misses the data") for s in w), w
     assert "the polished fit is at the noise level" in short[0] and "cost at the true parameters" in short[0]
     commands = _suggested(short[0])
-    assert commands[0] == ["python", "-m", "benchmark", "optimizer=deap", "budget=1500", *FAST, "polish=true"]
+    assert commands[0] == ga + ["polish=true"]
     assert commands[1] == ["python", "-m", "benchmark", *FAST]  # the default optimiser, its own budget
     again = _run(commands[0] + [f"hydra.run.dir={tmp_path / 'polished'}"], tmp_path)
     assert again.returncode == 0, again.stderr
