@@ -355,11 +355,12 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
                  identify=functools.partial(identify, plugin=plugin, budget=budget, name=name,
                                             polish_budget=polish_budget, time_limit_s=cfg.get("time_limit_s")))
     problem, ident, result = rev.problem, rev.ident, rev.ident.result
-    run_warnings += rev.notes
+    run_warnings += rev.warnings
     history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
     nuisance = refine_nuisance(problem, x_best, f_best)
     if nuisance is not None and nuisance.accepted:
         x_best, f_best = nuisance.x, nuisance.cost
+    rev.explain(x_best, int(cfg.polish_budget))
     wall = time.perf_counter() - t_start
 
     assessment = assess(problem, x_best, status=ident.status, budget=budget, overrides=run_overrides(cfg),
@@ -408,7 +409,8 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "bounds": {n: [float(lo), float(hi)] for n, lo, hi in zip(problem.parameter_names, problem.lower,
                                                                  problem.upper, strict=True)},
         "problem_info": problem.describe(),
-        "review": rev.record(),  # stopped short? a stop record set aside? (core/review.py)
+        "review": rev.record(),  # stopped short? a stop record set aside? a prior's weight? (core/review.py)
+        "notes": rev.notes,  # what the reader should know that is no warning (e.g. what a prior cost)
         # what the user must know before trusting the estimate (empty when all is well): the
         # data and set-up's own, then the verdict on the fit (benchmark.core.quality)
         "warnings": run_warnings + assessment["warnings"],
@@ -494,6 +496,7 @@ def format_table(record: dict) -> str:
         lines.append("fit quality (RMS misfit / noise): " + ", ".join(
             f"{k} {v['ratio']:.3g}{'' if v['at_noise_level'] else ' (!)' if v['ratio'] > v['threshold'] else ''}"
             for k, v in fq.items()))
+    lines += [f"note: {n}" for n in record.get("notes") or []]
     warns = record.get("warnings") or []
     lines.append(f"warnings: {len(warns)}" if warns else "warnings: none")
     lines += [f"  - {w}" for w in warns]

@@ -12,10 +12,16 @@ the problem itself want the result from another set-up?
   fit still misses the data, the problem may return a result of another problem that should
   replace it (time domain: a stop record that is no free coast set aside,
   :mod:`benchmark.problems.timedomain.stop_record`), with the lines that say why.
+* **Calibration** (``problem.calibrate(x)``, optional, first): a cost whose weights depend on the
+  fit (time domain: a prior on Rs weighed by the data's own uncertainty of Rs,
+  :mod:`benchmark.problems.timedomain.stator_prior`) is set at the result, which is polished
+  again, until the weights hold; ``problem.explain(x, polish_budget)`` (optional, at the final
+  point: :meth:`Review.explain`) says what such a term did (``notes`` of the result).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -27,6 +33,8 @@ from benchmark.core.quality import fit_quality
 
 #: A polish from the result, or the truth, with a cost this share lower: the optimiser stopped short.
 SHORT_GAIN = 0.01
+#: At most this many rounds of a problem's calibration (each: weights set at the fit, then a polish).
+CALIBRATION_ROUNDS = 4
 
 
 def misses(quality: dict) -> bool:
@@ -74,47 +82,78 @@ def stopped_short(problem, x, cost: float, status: str, polish_budget: int, qual
     return out
 
 
+def calibrated(problem, ident, polish_budget: int) -> tuple[object, dict | None]:
+    """``ident`` after the problem's calibration (``problem.calibrate(x)``: True when it changed
+    the cost's weights at ``x``; then a least-squares polish from ``x``, at most
+    :data:`CALIBRATION_ROUNDS` rounds), with its cost under the final weights; and a record
+    (rounds, evaluations), or None when the problem has nothing to calibrate."""
+    calibrate = getattr(problem, "calibrate", None)
+    if calibrate is None or ident.x is None:
+        return ident, None
+    x, rounds, evaluations = np.asarray(ident.x, float), 0, 0
+    while rounds < CALIBRATION_ROUNDS and calibrate(x):
+        rounds += 1
+        with np.errstate(all="ignore"):
+            pol = polish_least_squares(problem, x, int(polish_budget))
+        evaluations += pol.nfev
+        if pol.best_x is not None:
+            x = np.asarray(pol.best_x, float)
+    if rounds == 0:
+        return ident, None
+    cost = float(problem.evaluate(x[None, :])[0])
+    return dataclasses.replace(ident, x=x, cost=cost), {"rounds": rounds, "evaluations": evaluations}
+
+
 @dataclass
 class Review:
     """What the second look found: the problem and identification to report (replaced when the
     problem's second look said so), the stopped-short check of that identification, what the
-    second look recorded and the lines the result must carry."""
+    second look and the calibration recorded, the warnings and notes the result must carry."""
 
     problem: object
     ident: object
     shortfall: dict | None = None
     second_look: dict | None = None
+    calibration: dict | None = None
+    explained: dict | None = None
+    warnings: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+
+    def explain(self, x, polish_budget: int) -> list[str]:
+        """What the problem says about its final fit ``x`` (``problem.explain``; after anything
+        that still moves ``x``, such as a nuisance's estimate): the notes of the result."""
+        explain = getattr(self.problem, "explain", None)
+        if explain is not None and x is not None:
+            self.notes, self.explained = explain(x, polish_budget)
+        return self.notes
 
     def record(self) -> dict:
         """The JSON-able part of the review for ``result.json``."""
         short = None if self.shortfall is None else {k: v for k, v in self.shortfall.items() if k != "x_polished"}
         second = None if self.second_look is None else self.second_look.get("record")
-        return {"stopped_short": short, "second_look": second}
+        return {"stopped_short": short, "second_look": second, "calibration": self.calibration,
+                "explained": self.explained}
 
 
 def review(problem, ident, *, identify: Callable, seed: int, polish_budget: int) -> Review:
-    """The stopped-short check of ``ident`` (an :class:`benchmark.core.identify.Identification`),
-    then, where the fit still misses the data at its best point, the problem's second look
-    (``identify(problem, seed=...)`` runs the same identification on another problem); a
-    replacing result gets its own stopped-short check."""
+    """The problem's calibration of ``ident`` (an :class:`benchmark.core.identify.Identification`),
+    its stopped-short check, then, where the fit still misses the data at its best point, the
+    problem's second look (``identify(problem, seed=...)`` runs the same identification on another
+    problem); a replacing result gets its own calibration and check. What the problem says
+    about the final fit comes after (:meth:`Review.explain`)."""
+    ident, calibration = calibrated(problem, ident, polish_budget)
     quality = fit_quality(problem, ident.x) if ident.x is not None else {}
-    out = Review(problem, ident, shortfall=stopped_short(problem, ident.x, ident.cost, ident.status, polish_budget,
-                                                         quality))
+    out = Review(problem, ident, calibration=calibration,
+                 shortfall=stopped_short(problem, ident.x, ident.cost, ident.status, polish_budget, quality))
     look = getattr(problem, "second_look", None)
-    if look is None or ident.x is None:
-        return out
     x_best = ident.x
     if out.shortfall is not None and out.shortfall["x_polished"] is not None:
         x_best, quality = out.shortfall["x_polished"], out.shortfall["quality_polished"]
-    if not misses(quality):
-        return out
-    second = look(x_best, identify, seed)
-    if second is None:
-        return out
-    out.second_look, out.notes = second, list(second["lines"])
-    if second.get("problem") is not None:
-        new = second["identification"]
-        out.problem, out.ident = second["problem"], new
-        out.shortfall = stopped_short(out.problem, new.x, new.cost, new.status, polish_budget)
+    second = look(x_best, identify, seed) if look is not None and x_best is not None and misses(quality) else None
+    if second is not None:
+        out.second_look, out.warnings = second, list(second["lines"])
+        if second.get("problem") is not None:
+            out.problem = second["problem"]
+            out.ident, out.calibration = calibrated(out.problem, second["identification"], polish_budget)
+            out.shortfall = stopped_short(out.problem, out.ident.x, out.ident.cost, out.ident.status, polish_budget)
     return out

@@ -103,9 +103,12 @@ def check_config(run) -> None:
     case = pcfg.get("friction_case", 2)
     if isinstance(case, bool) or case not in (1, 2):
         raise ConfigError(f"problem.friction_case: must be 1 (no Coulomb friction) or 2 (with), got {case!r}")
-    rs = pcfg.get("stator_resistance", "free")
-    if rs not in ("free", "prior", "fixed"):
-        raise ConfigError(f"problem.stator_resistance: must be free, prior or fixed, got {rs!r}")
+    rs = pcfg.get("stator_resistance", "auto")
+    if rs not in ("free", "prior", "fixed", "auto"):
+        raise ConfigError(f"problem.stator_resistance: must be free, prior, fixed or auto, got {rs!r}")
+    spread = pcfg.get("stator_prior_spread", 20.0)
+    if isinstance(spread, bool) or not isinstance(spread, (int, float)) or not math.isfinite(spread) or spread <= 0:
+        raise ConfigError(f"problem.stator_prior_spread: must be a positive number of kelvin, got {spread!r}")
     held = pcfg.get("held_friction")
     if held is not None:
         if not hasattr(held, "items") or sorted(str(k) for k in held) != ["fc", "fv"]:

@@ -38,10 +38,11 @@ from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
 from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
+from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
 
 
-class TimeDomainProblem(SwitchOnFlux, Problem):
+class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
     """Start-up record fit. See the module docstring for the cost and the searched set.
 
     Parameters
@@ -55,9 +56,12 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
     weights : (ka, kb, kw). The speed weight is set to 0 when no record has a speed (a record
         without a speed sensor has ``speed`` all NaN; those NaN are replaced by 0 in the arrays).
     truth : true parameters for scoring, or None.
-    stator_resistance : ``free`` (searched), ``prior`` (searched, with a penalty residual pulling
-        it towards the DC value, see :meth:`prior_residual`) or ``fixed`` (not searched: held at
-        the DC value). ``prior`` and ``fixed`` need ``dataset.stator_dc_resistance``.
+    stator_resistance : ``free`` (searched), ``prior`` (searched, with the DC value as a Gaussian
+        prior weighed against the data: :mod:`benchmark.problems.timedomain.stator_prior`) or
+        ``fixed`` (not searched: held at the DC value). ``prior`` and ``fixed`` need
+        ``dataset.stator_dc_resistance``.
+    prior_spread : K, one-sigma spread of the winding's temperature during the record about its
+        temperature at the DC measurement (the prior's width).
     """
 
     name = "timedomain"
@@ -67,7 +71,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
     def __init__(self, dataset: StartupDataset, lower, upper, mechanical: MechanicalEstimate | None = None,
                  inertia: float | None = None, exponent: int = 1, weights=(1.0, 1.0, 0.5),
                  truth: dict | None = None, stator_resistance: str = "free",
-                 held_friction: tuple[float, float] | None = None):
+                 held_friction: tuple[float, float] | None = None, prior_spread: float = DEFAULT_SPREAD_K):
         if exponent not in (1, 2):
             raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent}")
         self.dataset = dataset
@@ -117,7 +121,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         # what the problem was made from (problem_from_dataset): settings and the loaded data set
         self.settings: TimeDomainSettings | None = None
         self.loaded_dataset: StartupDataset | None = None
-        self._prior_scale = None
+        self._init_prior(prior_spread)
         self._init_switch_on_flux()
 
     # -- parameter vectors -------------------------------------------------------------
@@ -148,34 +152,9 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         for (v_a, v_b, i_a, i_b, w), used in zip(self._records, self._current_used, strict=True):
             total += startup_cost_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time, i_a, i_b, w,
                                         float(self.dataset.pole_pairs), self.weights, self.exponent, used)
-        if self.stator_resistance == "prior":
-            p = self.prior_residual(X)
-            total = total + (p**2 if self.exponent == 2 else np.abs(p))
+        if self.prior_active:
+            total = total + self.prior_cost(X)
         return total
-
-    # -- stator resistance prior -------------------------------------------------------
-    #: Relative one-sigma uncertainty of the DC resistance as a value of Rs during the record
-    #: (measurement, and the winding temperature drifting from the DC measurement's).
-    RS_PRIOR_REL_STD = 0.05
-
-    def prior_residual(self, X: np.ndarray) -> np.ndarray:
-        """The penalty residual of ``stator_resistance=prior``, one per candidate:
-        ``s (Rs - R_dc) / (0.05 R_dc)``, ``s`` the noise of one weighted sample (square root of
-        the sum over channels of weight x noise variance, from :meth:`channel_noise`). With
-        eq. 14 its square is the Gaussian prior ``Rs ~ N(R_dc, (0.05 R_dc)^2)`` in the units of
-        the cost (a MAP estimate); with eq. 15 its absolute value is added (a Laplace prior of
-        about the same width). The DC value is used as measured (no temperature correction:
-        the record is taken to be at ``winding_temperature``)."""
-        X = np.atleast_2d(np.asarray(X, float))
-        if self._prior_scale is None:
-            var = 0.0
-            for per_record in self.channel_noise():
-                for c, est in enumerate(per_record):
-                    if est is not None:
-                        var += self.weights[c] * est.std**2
-            self._prior_scale = math.sqrt(var) if var > 0 else 1e-3
-        rs = X[:, self.parameter_names.index("Rs")]
-        return self._prior_scale * (rs - self.rs_dc) / (self.RS_PRIOR_REL_STD * self.rs_dc)
 
     # -- noise, fit quality and warnings (benchmark.core.quality) ----------------------------
     def channel_noise(self) -> list[list]:
@@ -207,7 +186,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             for c, key in enumerate(WEIGHT_KEYS):
                 out.append((key if len(self._records) == 1 else f"{key}[{j}]", offset + c * m, offset + (c + 1) * m))
             offset += 3 * m
-        if self.stator_resistance == "prior":
+        if self.prior_active:
             out.append(("Rs prior", offset, offset + 1))
         return out
 
@@ -288,11 +267,15 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             if abs(dev) > self.RS_DC_TOLERANCE:
                 temp = getattr(self.dataset, "winding_temperature", None)
                 at = f" at {temp:g} C" if temp is not None else ""
+                advice = ("even with the DC value as its prior: the data pull it there (the model misses the data, "
+                          "or the winding's temperature is far from the DC measurement's); add "
+                          "problem.stator_resistance=fixed to hold it, and diagnose the data"
+                          if self.stator_resistance == "prior" else
+                          "the fit may be in a wrong minimum or the model misses the data; add "
+                          "problem.stator_resistance=prior (or fixed) to the command, and diagnose the data")
                 out.append(f"Rs = {rs:.4g} ohm departs from the DC resistance {self.rs_dc:.4g} ohm{at} "
                            f"(meta.yaml stator_dc_resistance) by {100 * dev:+.0f} % (more than "
-                           f"{100 * self.RS_DC_TOLERANCE:.0f} %): the fit may be in a wrong minimum or the model "
-                           "misses "
-                           "the data; try problem.stator_resistance=prior or fixed, and run benchmark.diagnose")
+                           f"{100 * self.RS_DC_TOLERANCE:.0f} %) {advice}")
         return out
 
     def simulate(self, X: np.ndarray) -> list[np.ndarray]:
@@ -314,7 +297,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             if used is not None:  # masked current samples: residual 0 (no cost, no Jacobian row)
                 e[:, :2, ~used] = 0.0
             parts.append(e.reshape(len(sim), -1))
-        if self.stator_resistance == "prior":
+        if self.prior_active:
             parts.append(self.prior_residual(X)[:, None])
         r = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(r), r, np.nan)
@@ -333,8 +316,8 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             block = r[offset:offset + 3 * m].reshape(3, m)
             total += float(np.sqrt(self.weights) @ np.abs(block).sum(axis=1))
             offset += 3 * m
-        if self.stator_resistance == "prior":
-            total += float(abs(r[offset]))
+        if self.prior_active:
+            total += self.prior.cost_of_residual(r[offset])
         return total
 
     @property
@@ -413,7 +396,10 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
                  "(problem.held_friction), not searched: J absorbs any difference from the true friction, "
                  "which its standard error does not include"),
             stacklevel=2)
-    names = ([] if settings.stator_resistance == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
+    rs_mode = settings.stator_resistance
+    if rs_mode == "auto":  # the DC resistance in meta.yaml makes the prior the default
+        rs_mode = "prior" if ds.stator_dc_resistance else "free"
+    names = ([] if rs_mode == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
         (["J"] if inertia is None else []) + ([] if mechanical or held is not None else ["fv", "fc"])
     bounds = choose_bounds(settings, names, ds)
     problem = TimeDomainProblem(
@@ -425,10 +411,12 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         exponent=settings.exponent,
         weights=list(settings.weights),
         truth=truth,
-        stator_resistance=settings.stator_resistance,
+        stator_resistance=rs_mode,
         held_friction=held,
+        prior_spread=settings.stator_prior_spread,
     )
     problem.settings, problem.loaded_dataset = settings, loaded
+    problem.prior_by_default = settings.stator_resistance == "auto" and rs_mode == "prior"
     return problem
 
 

@@ -55,7 +55,10 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     the default pipeline ended with two local starts agreeing on J a ninth of the motor's at
     8 times the cost. Returns the parameters, the data set with the nuisance applied (the one
     the diagnosis's models are fitted to) and what the runs ended at."""
-    settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None)
+    # the base keeps Rs free unless the run asks for a prior (problem.stator_resistance=prior)
+    rs_mode = "free" if problem_settings.stator_resistance == "auto" else problem_settings.stator_resistance
+    settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None,
+                                   stator_resistance=rs_mode)
     problem = problem_from_dataset(settings, ds, truth=None)
     runs = []
     for offset in BASE_SEED_OFFSETS:
