@@ -10,6 +10,7 @@ import numpy as np
 
 from benchmark.core.errors import ConfigError
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.frames import fundamental, phasor_speed
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 
@@ -33,13 +34,11 @@ def derive_bounds(ds: StartupDataset, names: tuple[str, ...]) -> dict[str, tuple
     i = r.i_alpha + 1j * r.i_beta
     t = r.t
     # electrical supply frequency from the voltage phasor's rotation over the tail
-    phase = np.unwrap(np.angle(v[tail]))
-    w_e = abs(np.polyfit(t[tail], phase, 1)[0])
+    w_e = abs(phasor_speed(r.v_alpha[tail], r.v_beta[tail], t[tail]))
     if not w_e > 0:
         raise ConfigError("bounds: cannot derive bounds: the start-up voltage does not rotate; give bounds=...")
-    rot = np.exp(-1j * w_e * t[tail])
-    V1 = abs(np.mean(v[tail] * rot))
-    I0 = abs(np.mean(i[tail] * rot))
+    V1 = abs(fundamental(v[tail], t[tail], w_e))
+    I0 = abs(fundamental(i[tail], t[tail], w_e))
     I_pk = float(np.max(np.abs(i)))
     Ls0 = V1 / (I0 * w_e)
     Z_sc = V1 / I_pk

@@ -19,6 +19,7 @@ import warnings
 import numpy as np
 
 from benchmark.core.errors import DataError, DataWarning
+from benchmark.problems.timedomain.frames import fundamental, phasor_speed
 
 #: A motor's current lags its voltage by 0-90 degrees; a phase angle outside this window (deg)
 #: is no motor's: labels rotated by 120 degrees move it by 120.
@@ -43,12 +44,6 @@ HELD_SHARE = 0.5
 INVERTER_LEVELS = 64
 
 
-def fundamental(x: np.ndarray, t: np.ndarray, w_e: float) -> complex:
-    """Phasor of the complex channel ``x`` at the electrical speed ``w_e`` (rad/s): the mean of
-    ``x exp(-j w_e t)`` (its amplitude is the alpha-beta, i.e. phase peak, amplitude)."""
-    return complex(np.mean(x * np.exp(-1j * w_e * t)))
-
-
 def _tail(rec) -> slice:
     n = len(rec.t)
     return slice(int(0.8 * n), n)
@@ -57,8 +52,7 @@ def _tail(rec) -> slice:
 def electrical_speed(rec) -> float:
     """Signed rotation speed (rad/s) of the voltage phasor over the record's last fifth."""
     tail = _tail(rec)
-    phase = np.unwrap(np.angle(rec.v_alpha[tail] + 1j * rec.v_beta[tail]))
-    return float(np.polyfit(rec.t[tail], phase, 1)[0]) if len(phase) > 8 else 0.0
+    return phasor_speed(rec.v_alpha[tail], rec.v_beta[tail], rec.t[tail])
 
 
 def _columns(rec, kind: str) -> str:

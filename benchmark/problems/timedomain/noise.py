@@ -46,6 +46,7 @@ from benchmark.core.noise_estimates import (
     noise_from_smooth,
     refine_frequency,
 )
+from benchmark.problems.timedomain.frames import phasor_speed
 
 #: Fallback relative uncertainty of the fourth-difference estimate.
 FALLBACK_REL_UNCERTAINTY = 0.2
@@ -262,10 +263,8 @@ def settled(speed: np.ndarray | None, n: int, k_ss: int, fs: float, f0: float) -
 
 def supply_frequency_of(t, v_alpha, v_beta) -> float:
     """Supply frequency (Hz) from the voltage phasor's phase over the last fifth of the record."""
-    n = len(t)
-    tail = slice(int(0.8 * n), n)
-    phase = np.unwrap(np.angle((np.asarray(v_alpha) + 1j * np.asarray(v_beta))[tail]))
-    return abs(float(np.polyfit(t[tail], phase, 1)[0])) / (2 * math.pi)
+    tail = slice(int(0.8 * len(t)), len(t))
+    return abs(phasor_speed(np.asarray(v_alpha)[tail], np.asarray(v_beta)[tail], np.asarray(t)[tail])) / (2 * math.pi)
 
 
 def record_noise(record, supply_frequency: float | None = None) -> tuple[dict[str, NoiseEstimate], float]:

@@ -33,6 +33,7 @@ from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config:
 )
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.filters import zero_phase_lowpass
+from benchmark.problems.timedomain.frames import phasor_speed
 from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
 from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
@@ -364,11 +365,8 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
 
 def _supply_frequency(v_a, v_b, dt: float) -> float | None:
     """Electrical frequency (Hz) from the rotation of the voltage phasor, or None."""
-    phase = np.unwrap(np.angle(np.asarray(v_a) + 1j * np.asarray(v_b)))
-    if len(phase) < 8:
-        return None
-    w = abs(np.polyfit(np.arange(len(phase)) * dt, phase, 1)[0])
-    return float(w / (2 * np.pi)) if np.isfinite(w) and w > 0 else None
+    w = abs(phasor_speed(v_a, v_b, np.arange(len(v_a)) * dt))
+    return w / (2 * np.pi) if w > 0 else None
 
 
 # -- set-up from typed settings ---------------------------------------------------------
