@@ -180,7 +180,7 @@ def misses_data_warning(quality: dict, overrides=None, shortfall: dict | None = 
         finish = (f"run `{commands.rerun_command(overrides, polish=True)}` (the same run with a polish), or the "
                   f"default optimiser: `{commands.rerun_command(overrides, optimizer=None, budget=None)}`")
         still = _above(shortfall.get("quality_polished"))
-        if shortfall.get("quality_polished") is not None and not still:
+        if shortfall.get("quality_polished") and not still:  # (a problem without fit channels says nothing)
             return (f"the optimiser stopped short: {' and '.join(found)}, and the polished fit is at the noise "
                     f"level: the model does not miss the data, the search ended early; {finish}")
         tail = (f"; even the polished fit misses the data: RMS misfit of {_misfits(still)}; then run `{diagnose}`"
