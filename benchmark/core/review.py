@@ -28,7 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from benchmark.core.polish import polish_least_squares
+from benchmark.core.budget import BudgetedProblem
+from benchmark.core.polish import least_squares_batch, polish_least_squares
 from benchmark.core.quality import fit_quality
 
 #: A polish from the result, or the truth, with a cost this share lower: the optimiser stopped short.
@@ -82,22 +83,32 @@ def stopped_short(problem, x, cost: float, status: str, polish_budget: int, qual
     return out
 
 
+def least_squares_end(problem, x, budget: int) -> tuple[np.ndarray, int]:
+    """Where least squares on the problem's residuals from ``x`` ends (within ``budget``
+    evaluations), and the evaluations it took. Unlike a polish, which keeps the point of lowest
+    problem cost, this is the minimum of the residuals' sum of squares itself: where the cost is
+    eq. 15's sum of absolute errors, a term added to the least-squares objective (a prior)
+    moves this point, while each step towards it may raise the absolute-error cost."""
+    counted = BudgetedProblem(problem, int(budget))
+    with np.errstate(all="ignore"):
+        end, _ = least_squares_batch(counted.residuals_batch, np.asarray(x, float), counted.lower, counted.upper,
+                                     int(budget))
+    return np.asarray(end, float), int(counted.nfev)
+
+
 def calibrated(problem, ident, polish_budget: int) -> tuple[object, dict | None]:
     """``ident`` after the problem's calibration (``problem.calibrate(x)``: True when it changed
-    the cost's weights at ``x``; then a least-squares polish from ``x``, at most
-    :data:`CALIBRATION_ROUNDS` rounds), with its cost under the final weights; and a record
-    (rounds, evaluations), or None when the problem has nothing to calibrate."""
+    the cost's weights at ``x``; then least squares from ``x`` to its end, :func:`least_squares_end`,
+    at most :data:`CALIBRATION_ROUNDS` rounds), with its cost under the final weights; and a
+    record (rounds, evaluations), or None when the problem has nothing to calibrate."""
     calibrate = getattr(problem, "calibrate", None)
     if calibrate is None or ident.x is None:
         return ident, None
     x, rounds, evaluations = np.asarray(ident.x, float), 0, 0
     while rounds < CALIBRATION_ROUNDS and calibrate(x):
         rounds += 1
-        with np.errstate(all="ignore"):
-            pol = polish_least_squares(problem, x, int(polish_budget))
-        evaluations += pol.nfev
-        if pol.best_x is not None:
-            x = np.asarray(pol.best_x, float)
+        x, n = least_squares_end(problem, x, polish_budget)
+        evaluations += n
     if rounds == 0:
         return ident, None
     cost = float(problem.evaluate(x[None, :])[0])

@@ -185,19 +185,18 @@ class StatorPriorTerms:
                                     self.hac_bandwidth_floor())
 
     def explain(self, x, polish_budget: int) -> tuple[list[str], dict | None]:
-        """What the prior did at the fit ``x``: the data alone fitted locally from ``x`` (a polish
-        without the prior) give Rs and each channel's misfit without it. Returns the lines the
+        """What the prior did at the fit ``x``: the data alone fitted locally from ``x`` (least
+        squares without the prior, to its end) give Rs and each channel's misfit without it. Returns the lines the
         result prints and the record (None without a prior)."""
         if not self.prior_active:
             return [], None
-        from benchmark.core.polish import polish_least_squares
         from benchmark.core.quality import fit_quality
+        from benchmark.core.review import least_squares_end
 
         x = np.asarray(x, float)
         self._prior_off = True
         try:
-            pol = polish_least_squares(self, x, int(polish_budget))
-            x_free = x if pol.best_x is None else np.asarray(pol.best_x, float)
+            x_free, evaluations = least_squares_end(self, x, polish_budget)
             q_free = fit_quality(self, x_free)
         finally:
             self._prior_off = False
@@ -216,5 +215,5 @@ class StatorPriorTerms:
                 f"({100 * (rs / p.dc - 1):+.1f} % from DC), the data alone {rs_free:.4g} ohm "
                 f"({100 * (rs_free / p.dc - 1):+.1f} %). What it cost in misfit (RMS / noise): {misfit}")
         record = {**p.describe(), "Rs": rs, "Rs_data_alone": rs_free, "fit_quality_data_alone": q_free,
-                  "evaluations": int(pol.nfev)}
+                  "evaluations": evaluations}
         return [line], record
