@@ -29,6 +29,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from benchmark.core.budget import BudgetedProblem, run_plugin
+from benchmark.core.commands import run_overrides
 from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
@@ -39,6 +40,7 @@ from benchmark.core.problem import OptimizeResult, Problem, Status
 from benchmark.core.progress import ProgressBar, progress_wanted
 from benchmark.core.quality import assess
 from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
+from benchmark.core.review import review
 from benchmark.core.tables import table_size_limit
 from benchmark.core.threads import one_blas_thread
 
@@ -347,16 +349,23 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         if budgeted.replay_mismatch:
             run_warnings.append(f"resume: {budgeted.replay_mismatch['message']}")
 
-    ident = polish_and_keep_better(problem, result, budgeted,
-                                   int(cfg.polish_budget) if cfg.get("polish") else None)
+    polish_budget = int(cfg.polish_budget) if cfg.get("polish") else None
+    ident = polish_and_keep_better(problem, result, budgeted, polish_budget)
+    # did the optimiser stop short; does the problem want the result from another set-up (core/review.py)
+    rev = review(problem, ident, seed=seed, polish_budget=int(cfg.polish_budget),
+                 identify=functools.partial(identify, plugin=plugin, budget=budget, name=name,
+                                            polish_budget=polish_budget, time_limit_s=cfg.get("time_limit_s")))
+    problem, ident, result = rev.problem, rev.ident, rev.ident.result
+    run_warnings += rev.warnings
     history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
     nuisance = refine_nuisance(problem, x_best, f_best)
     if nuisance is not None and nuisance.accepted:
         x_best, f_best = nuisance.x, nuisance.cost
+    rev.explain(x_best, int(cfg.polish_budget))
     wall = time.perf_counter() - t_start
 
-    data_path = (cfg.get("data") or {}).get("path")
-    assessment = assess(problem, x_best, status=ident.status, data_path=data_path, budget=budget)
+    assessment = assess(problem, x_best, status=ident.status, budget=budget, overrides=run_overrides(cfg),
+                        shortfall=rev.shortfall)
     estimate = problem.estimate(x_best) if x_best is not None else None
     truth = problem.truth
     rel_error = score(estimate, truth) if estimate is not None else None
@@ -402,6 +411,8 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "bounds": {n: [float(lo), float(hi)] for n, lo, hi in zip(problem.parameter_names, problem.lower,
                                                                  problem.upper, strict=True)},
         "problem_info": problem.describe(),
+        "review": rev.record(),  # stopped short? a stop record set aside? a prior's weight? (core/review.py)
+        "notes": rev.notes,  # what the reader should know that is no warning (e.g. what a prior cost)
         # what the user must know before trusting the estimate (empty when all is well): the
         # data and set-up's own, then the verdict on the fit (benchmark.core.quality)
         "warnings": run_warnings + assessment["warnings"],
@@ -487,6 +498,7 @@ def format_table(record: dict) -> str:
         lines.append("fit quality (RMS misfit / noise): " + ", ".join(
             f"{k} {v['ratio']:.3g}{'' if v['at_noise_level'] else ' (!)' if v['ratio'] > v['threshold'] else ''}"
             for k, v in fq.items()))
+    lines += [f"note: {n}" for n in record.get("notes") or []]
     warns = record.get("warnings") or []
     lines.append(f"warnings: {len(warns)}" if warns else "warnings: none")
     lines += [f"  - {w}" for w in warns]
