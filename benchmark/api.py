@@ -68,8 +68,9 @@ def identify(data=None, *, outdir=None, **overrides) -> Identification:
         if outdir is None:
             overrides.setdefault("figures", False)
             overrides.setdefault("checkpoint", False)
-        cfg = compose_config("config", _overrides("config", data, path, overrides))
-        return identification_of(run(cfg, folder), folder if outdir is not None else None)
+        asked = _overrides("config", data, path, overrides)
+        cfg = compose_config("config", asked)
+        return identification_of(run(cfg, folder, overrides=asked), folder if outdir is not None else None)
 
 
 def identification_of(outcome, outdir: Path | None) -> Identification:
@@ -187,11 +188,11 @@ def _overrides(name: str, data, path: Path | None, overrides: dict) -> list[str]
     overrides = dict(overrides)
     if path is not None:
         overrides["data__path"] = str(path)
-        if "problem" not in overrides:
-            kind = data.problem if isinstance(data, DataSet) else _folder_problem(path)
-            if kind is not None:
-                overrides["problem"] = kind
     present = chosen(name)
+    if path is not None and "problem" not in overrides:
+        kind = data.problem if isinstance(data, DataSet) else _folder_problem(path)
+        if kind is not None and kind != present.get("problem"):
+            overrides["problem"] = kind
     return to_overrides(overrides, added_groups=[g for g in config_groups() if g not in present])
 
 

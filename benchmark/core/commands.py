@@ -56,9 +56,16 @@ def _key(override: str) -> str:
     return override.split("=", 1)[0].lstrip("+~")
 
 
+#: Keys that change only what a run writes or shows, not its numbers: a suggested command leaves
+#: them out (so the command line and the Python API suggest the same command).
+PRESENTATION_KEYS = ("figures", "checkpoint", "progress", "resume", "hydra")
+
+
 def command(module: str, overrides) -> str:
-    """``python -m module`` with the overrides, each quoted for the shell."""
-    return " ".join(["python", "-m", module, *(shlex.quote(o) for o in overrides)])
+    """``python -m module`` with the overrides, each quoted for the shell (without the
+    :data:`PRESENTATION_KEYS`)."""
+    kept = [o for o in overrides if _key(o).split(".")[0] not in PRESENTATION_KEYS]
+    return " ".join(["python", "-m", module, *(shlex.quote(o) for o in kept)])
 
 
 def rerun_command(overrides, **changes) -> str:

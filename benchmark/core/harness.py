@@ -271,8 +271,9 @@ def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[st
 
 
 @one_blas_thread
-def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
-    """One identification run, written to ``outdir``.
+def run(cfg: DictConfig, outdir: Path, overrides: list[str] | None = None) -> RunOutcome:
+    """One identification run, written to ``outdir``; ``overrides`` are what the user asked for
+    (the API's keyword arguments; None: the command line's), from which suggested commands are built.
 
     Checkpoints (``checkpoint``, default true): every evaluated batch is journaled to
     ``outdir/journal.bin`` as it happens. With ``resume=true`` and the same ``outdir``
@@ -364,7 +365,7 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
     rev.explain(x_best, int(cfg.polish_budget))
     wall = time.perf_counter() - t_start
 
-    assessment = assess(problem, x_best, status=ident.status, budget=budget, overrides=run_overrides(cfg),
+    assessment = assess(problem, x_best, status=ident.status, budget=budget, overrides=run_overrides(cfg) if overrides is None else overrides,
                         shortfall=rev.shortfall)
     estimate = problem.estimate(x_best) if x_best is not None else None
     truth = problem.truth

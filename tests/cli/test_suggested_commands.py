@@ -52,9 +52,10 @@ def test_a_ga_that_stopped_short_is_called_that_and_its_command_runs(tmp_path):
     assert len(short) == 1 and not any(s.startswith("the model misses the data") for s in w), w
     assert "the polished fit is at the noise level" in short[0] and "cost at the true parameters" in short[0]
     commands = _suggested(short[0])
-    assert commands[0] == ga + ["polish=true"]
-    assert commands[1] == ["python", "-m", "benchmark", *FAST]  # the default optimiser, its own budget
-    again = _run(commands[0] + [f"hydra.run.dir={tmp_path / 'polished'}"], tmp_path)
+    # the run's own overrides, without those that only change what it writes or shows
+    assert commands[0] == ["python", "-m", "benchmark", "optimizer=deap", "budget=600", "polish=true"]
+    assert commands[1] == ["python", "-m", "benchmark"]  # the default optimiser, its own budget
+    again = _run(commands[0] + [*FAST, f"hydra.run.dir={tmp_path / 'polished'}"], tmp_path)
     assert again.returncode == 0, again.stderr
     rec = json.loads((tmp_path / "polished" / "result.json").read_text())
     assert rec["status"] == "converged" and rec["warnings"] == [], rec["warnings"]
@@ -72,8 +73,8 @@ def test_a_model_that_misses_suggests_the_diagnosis_of_that_folder_and_it_runs(t
     assert len(misses) == 1 and not any(s.startswith("the optimiser stopped short") for s in w), w
     assert "a polish from the result does not lower the cost" in misses[0]
     (command,) = _suggested(misses[0])
-    assert command == ["python", "-m", "benchmark.diagnose", f"data.path={folder}", "figures=false"]
-    cheap = ["budget=300", "polish_budget=100", "candidates=[double_cage]", "diagnosis.fit_iterations=4",
+    assert command == ["python", "-m", "benchmark.diagnose", f"data.path={folder}"]
+    cheap = ["figures=false", "budget=300", "polish_budget=100", "candidates=[double_cage]", "diagnosis.fit_iterations=4",
              "diagnosis.final_iterations=8", f"hydra.run.dir={tmp_path / 'diag'}"]
     diag = _run(command + cheap, tmp_path)
     assert diag.returncode == 0, diag.stderr
