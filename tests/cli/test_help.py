@@ -12,7 +12,7 @@ import pytest
 from benchmark.core.config_files import config_groups
 
 ENTRY_POINTS = {  # module: keys its help must name
-    "benchmark": ["seed=0", "budget=null", "data.path=null", "progress=auto", "problem.stator_resistance=free",
+    "benchmark": ["seed=0", "budget=null", "data.path=null", "progress=auto", "problem.stator_resistance=auto",
                   "optimizer.plugin.{global_fraction=0.4"],
     "benchmark.diagnose": ["candidates=null", "effects=[]", "diagnosis.{base_case=2", "budget=8000"],
     "synthetic": ["out=", "effects=[]", "effect_size=null"],
@@ -51,7 +51,7 @@ def test_the_help_follows_the_choices_on_the_command_line(capsys):
     _, out, _ = _run_module("benchmark", ["problem=admittance", "optimizer=genesis", "--help"], capsys)
     assert "problem.{model=auto" in out and "optimizer.plugin.{population_size=100" in out
     assert "optimizer  cmaes" in out and "genesis*" in out
-    assert "problem.stator_resistance=free" not in out
+    assert "problem.stator_resistance=auto" not in out
     assert set(config_groups()) == {"experiment", "motor", "noise", "optimizer", "problem"}
 
 
