@@ -14,7 +14,6 @@ batched through the kernel), in coordinates normalised to their bounds.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,22 +27,14 @@ from benchmark.problems.timedomain.diagnosis.engine import quiet
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
 from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
-from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
 from benchmark.problems.timedomain.extended import IDX, base_rows, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
+from benchmark.problems.timedomain.noise import record_noise, stop_noise
 from benchmark.problems.timedomain.simulation import hold_is_linear
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
 DIVERGED = 1e6
-
-
-def supply_frequency_of(t, v_alpha, v_beta) -> float:
-    """Supply frequency (Hz) from the voltage phasor's phase over the last fifth of the record."""
-    n = len(t)
-    tail = slice(int(0.8 * n), n)
-    phase = np.unwrap(np.angle((v_alpha + 1j * v_beta)[tail]))
-    return abs(float(np.polyfit(t[tail], phase, 1)[0])) / (2 * math.pi)
 
 
 @dataclass
@@ -75,11 +66,8 @@ class DiagnosisData:
     def from_dataset(cls, ds: StartupDataset) -> DiagnosisData:
         r = ds.startups[0]
         speed = np.asarray(r.speed, float)
-        has_speed = bool(np.all(np.isfinite(speed)))
         meas = np.stack([r.i_alpha, r.i_beta, speed])
-        f_supply = ds.supply_frequency or supply_frequency_of(r.t, r.v_alpha, r.v_beta)
-        noise = startup_noise(r.t, r.v_alpha, r.v_beta, r.i_alpha, r.i_beta, speed if has_speed else None,
-                              float(f_supply), frequency_known=bool(ds.supply_frequency))
+        noise, f_supply = record_noise(r, ds.supply_frequency)
         stop_t = stop_speed = w0 = None
         if ds.stops:
             st = ds.stops[0]

@@ -5,7 +5,8 @@
    viscous friction) from the stop record; without one, ``fv`` and ``fc`` are searched.
    ``diagnosis.base_case=1`` drops Coulomb friction from the base (``coulomb_friction`` is then
    a candidate).
-2. Noise of every channel from the data, with its own uncertainty (:mod:`.noise`).
+2. Noise of every channel from the data, with its own uncertainty
+   (:mod:`benchmark.problems.timedomain.noise`, the one estimate the identification uses too).
 3. The machine's physical scales (:mod:`.scales`: rated torque and current, friction range)
    and each effect's prior range from them and from the experiment's facts (``docs/effects.md``).
 4. Refit the base jointly (start-up currents and speed, free-motion stop), each channel divided
@@ -40,7 +41,6 @@ from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointMode
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
 from benchmark.problems.timedomain.diagnosis.localise import localise
-from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.rule import STATUSES, Rule, status_of
 from benchmark.problems.timedomain.diagnosis.scales import (
     base_context,
@@ -51,6 +51,7 @@ from benchmark.problems.timedomain.diagnosis.scales import (
     rated_torque,
 )
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
+from benchmark.problems.timedomain.noise import combined
 
 __all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "estimated_rated_torque",
            "friction_scale", "held_by_base", "localise", "pullout_torque", "rated_torque", "screen", "status_of"]
