@@ -287,7 +287,10 @@ def uncertainty_warnings(names, values, se, corr, lower, upper, *, rel_se_max: f
         if not np.isfinite(s[j]):
             out.append(f"{name} is not identifiable from these data: its standard error is not finite")
         elif s[j] > rel_se_max * abs(v[j]):
-            rel = f"{100 * s[j] / abs(v[j]):.0f} % of its value" if v[j] != 0 else "larger than its value 0"
+            ratio = s[j] / abs(v[j]) if v[j] != 0 else np.inf
+            # a value at (or within rounding of) zero: the ratio says nothing, the size of the error does
+            rel = (f"{100 * ratio:.0f} % of its value" if ratio < 1e3
+                   else "more than 1000 times its value")
             out.append(f"{name} is not identifiable from these data: standard error {s[j]:.3g}{u} is {rel}"
                        f" {v[j]:.4g}{u} (limit {100 * rel_se_max:.0f} %)")
     for a in range(len(names)):

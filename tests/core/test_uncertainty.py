@@ -218,3 +218,13 @@ def test_misfit_ratio_band():
     assert fq.threshold == pytest.approx(1 + 2 * np.hypot(0.02, 0.01) + 0.05, rel=0.01)
     assert not misfit_ratio(1.2 * rng.standard_normal(5000), noise).at_noise_level
     assert not misfit_ratio(0.5 * rng.standard_normal(5000), noise).at_noise_level
+
+
+def test_a_standard_error_on_a_value_near_zero_is_not_a_huge_percentage():
+    """A parameter identified at (numerically) zero gets 'more than 1000 times its value', not
+    '6e35 % of its value'; an ordinary one keeps its percentage."""
+    w = uncertainty_warnings(["a", "b"], [1e-36, 2.0], [0.05, 1.5], np.eye(2), [-1.0, 0.0], [1.0, 10.0],
+                             units={"a": "ohm"})
+    assert w == ["a is not identifiable from these data: standard error 0.05 ohm is more than 1000 times its"
+                 " value 1e-36 ohm (limit 50 %)",
+                 "b is not identifiable from these data: standard error 1.5 is 75 % of its value 2 (limit 50 %)"]
