@@ -32,11 +32,12 @@ from omegaconf import open_dict
 
 from benchmark.analysis.blind import BlindSettings, diagnosis_config
 from benchmark.analysis.blind_sources import SOURCES
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.harness import identify, load_dataset, resolved
 from benchmark.core.io import write_text_atomic
 from benchmark.problems.timedomain.diagnosis.calibration import SHARES, chosen_share, diagnose_at_shares, rates
 
-CONF = str(Path(__file__).resolve().parents[2] / "conf")
+CONF = str(CONFIG_DIR)
 
 
 def parse(argv: list[str]) -> dict:

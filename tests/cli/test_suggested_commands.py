@@ -75,7 +75,7 @@ def test_a_model_that_misses_suggests_the_diagnosis_of_that_folder_and_it_runs(t
     (command,) = _suggested(misses[0])
     assert command == ["python", "-m", "benchmark.diagnose", f"data.path={folder}"]
     cheap = ["figures=false", "budget=300", "polish_budget=100", "candidates=[double_cage]",
-             "diagnosis.fit_iterations=4", "diagnosis.final_iterations=8", f"hydra.run.dir={tmp_path / 'diag'}"]
+             "diagnosis.screen_iterations=4", "diagnosis.max_iterations=8", f"hydra.run.dir={tmp_path / 'diag'}"]
     diag = _run(command + cheap, tmp_path)
     assert diag.returncode == 0, diag.stderr
     doc = json.loads((tmp_path / "diag" / "diagnosis.json").read_text())

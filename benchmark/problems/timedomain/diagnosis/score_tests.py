@@ -96,11 +96,10 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
     ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates).
 
     ``starts(model, x_fit, new)``: the linearisation points of an addition (each is tried, the
-    one that fits ``fit_mask`` best after its step kept), e.g. the screening's own starts
-    (``Selector.starts_with(..., every=False)``, then ``Selector.profiled``: the first starts and
-    those that move part of the base into an effect, such as a Coulomb friction that holds a
-    load step, with a start grid's instant set to its best value); by default
-    :func:`first_starts`. A new effect's grid parameter is held in the step."""
+    one that fits ``fit_mask`` best after its step kept), e.g. a selection's own starts with a
+    start grid's instant set to its best value (``Selector.profiled``); by default
+    :func:`first_starts`. A new effect's grid parameter is held in the step. The selection's pair
+    screening (``Selector.screen_pairs``) reads ``predicted_heldout_chi2``."""
     todo = [()] + [tuple(a) for a in additions]
     plans = []
     for i, add in enumerate(todo):
