@@ -8,6 +8,12 @@ that is 6.5 N m, a fifth of the rated torque, and the range, 1.5 ``T_acc``, coul
 step. The fit put the largest step it could at another instant and a coupled inertia beside it
 (verdict ``load_torque+two_mass``, 47.9 -> 32.6 times the noise). The scale is now the larger of
 ``T_acc`` and the rated torque estimated from the base model's pull-out torque.
+
+The step's fitted torque is checked against the plant's (27.2 N m). The held-out gap left
+(2.01 times the noise with the folds cut by segment; 1.52 with the interleaved folds of before)
+is the base model's floor on this PWM plant, not the load's fit: the same to four digits with 20
+screening evaluations or a 400-evaluation cap, so it is no longer asserted against a number set
+for the interleaved folds.
 """
 
 from __future__ import annotations
@@ -43,7 +49,13 @@ def test_a_load_step_after_a_slow_ramp_is_named_alone(tmp_path):
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "two_mass"])
     assert doc["verdict"] == "load_torque", doc["selection"]
     assert doc["gap_before"]["heldout_rms_over_noise"] > 30.0
-    assert doc["gap_after"]["heldout_rms_over_noise"] < 2.0
+    assert doc["explained_share"] > 0.99
+    # the step's torque (N m) against the plant's: its size is a fraction of the rated torque
+    from synthetic.independent.motors import get_motor
+
+    true_step = made.truth["effects"][0]["size"] * get_motor("simulink_7k5").rated_torque
+    fitted = doc["per_effect"][0]["physical"]["switched_Nm"]
+    assert fitted == pytest.approx(true_step, rel=0.05), (fitted, true_step)
     fit = doc["per_effect"][0]["parameters"]
     # the step's instant, as a fraction of the record (0.589 in the plant)
     assert fit["load_step_time"]["value"] == pytest.approx(made.truth["effects"][0]["step_fraction"], abs=0.005)
