@@ -69,8 +69,9 @@ class DiagnosisSettings:
     base_case : 2 (the paper's full model, Coulomb + viscous friction) or 1 (no Coulomb
         friction; ``coulomb_friction`` is then a candidate).
     selection_share : ``tau`` of :mod:`.rule`: the share of the excess held-out chi^2 of the
-        model without an effect that the effect must remove (calibrated on development data for
-        its false-selection rate, ``results/calibration.md``).
+        model without an effect that the effect must remove (to be calibrated on development data
+        for its false-selection rate by ``benchmark.studies.calibration``; not yet, see
+        ``docs/diagnosis.md``).
     band_k, band_floor : the noise band ``1 +- (band_k u + band_floor)`` of ``misfit_ratio`` (the
         identification's fit-quality band); ``band_k`` is also the number of standard errors
         that makes a difference (a held load, indistinguishable candidates).
