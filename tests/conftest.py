@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
+import numba
 import pytest
 from hydra import compose, initialize_config_dir
 from hypothesis import settings
@@ -15,7 +17,14 @@ from benchmark.problems.timedomain.protocol import StartupStopTest, run_startup_
 # by a longer local session (HYPOTHESIS_PROFILE=explore) can be replayed from its printout.
 settings.register_profile("ci", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
-settings.load_profile(__import__("os").environ.get("HYPOTHESIS_PROFILE", "ci"))
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+# pyproject's addopts run the tests on one pytest-xdist worker per core, each a process of its
+# own: there the compiled kernels and the fitting pools (sized by numba.get_num_threads()) get one
+# thread each, so that two workers do not run four threads on two cores. A test that sets its own
+# thread count (numba.set_num_threads) still can, up to NUMBA_NUM_THREADS.
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    numba.set_num_threads(1)
 
 CONF = str(Path(__file__).resolve().parents[1] / "conf")
 PAPER_MOTOR = InductionMotor(Rs=4.96434, Ls=0.1075, Le=0.01098, Rr=1.55618, J=0.00642, fv=0.00033, fc=0.04297, p=1)
