@@ -103,6 +103,9 @@ class Effect:
     size_name, size_unit : the size parameter of the plant and its unit.
     realistic : documented realistic range of the size.
     extra_names : the augmentation's extra parameters.
+    extra_units : the unit of each extra parameter, in :attr:`extra_names` order (a ratio says
+        what it is relative to: ``p.u. of the DC-link voltage``, ``fraction of the record``;
+        ``-`` only when dimensionless, e.g. an exponent); shown in the diagnosis reports.
     physics, shows_in : one line each, for reports.
     measure_stage : order of the measurement transforms (sensor chain): 0 timing (channel
         skew), 1 probe compression, 2 offsets, 3 speed sensor; row effects have none.
@@ -116,6 +119,7 @@ class Effect:
     size_unit = "-"
     realistic: tuple[float, float] = (0.0, 1.0)
     extra_names: tuple[str, ...] = ()
+    extra_units: tuple[str, ...] = ()
     physics = ""
     shows_in = ""
     measure_stage = 0
@@ -224,10 +228,20 @@ class Effect:
         the fitted base parameters (``Rs, Ls, Le, Rr, J, fv, fc``) when the report has them."""
         return {n: float(v) for n, v in zip(self.extra_names, np.ravel(extras), strict=False)}
 
+    def extra_unit(self, name: str) -> str | None:
+        """The unit of the extra parameter ``name`` (None when the effect does not declare it)."""
+        return dict(zip(self.extra_names, self.extra_units, strict=False)).get(name)
+
     def describe(self) -> dict:
         return {"name": self.name, "size": self.size_name, "unit": self.size_unit,
                 "realistic": list(self.realistic), "extra_parameters": list(self.extra_names),
+                "extra_units": list(self.extra_units),
                 "physics": self.physics, "shows_in": self.shows_in}
+
+
+def unit_suffix(unit: str | None) -> str:
+    """`` unit`` to follow a number in a report; empty for a dimensionless ``-`` or no unit."""
+    return f" {unit}" if unit and unit != "-" else ""
 
 
 def _plain(v):

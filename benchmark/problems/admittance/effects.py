@@ -175,6 +175,7 @@ class DoubleCage(AdmittanceEffect):
     size_name = "rotor_resistance_rise_at_standstill"
     realistic = (0.05, 0.4)
     extra_names = ("dc_rise", "dc_corner")
+    extra_units = ("p.u. of low-slip R2", "log10 of slip")
     physics = "second rotor cage / deep bars: rotor resistance and leakage depend on rotor frequency"
     shows_in = "conductance at large slip (braking, s > 1), both signs of s alike"
 
@@ -272,6 +273,7 @@ class MainSaturation(AdmittanceEffect):
     size_name = "X0_fall_at_top_voltage"
     realistic = (0.01, 0.08)
     extra_names = ("ms_fall", "ms_exp")
+    extra_units = ("p.u. of low-flux X0", "-")
     physics = "magnetising reactance falls with the air-gap flux"
     shows_in = "susceptance near synchronism (s ~ 0), different at each voltage level"
 
@@ -328,6 +330,7 @@ class IronLoss(AdmittanceEffect):
     size_name = "core_loss_conductance_exponent"
     realistic = (0.2, 1.0)
     extra_names = ("fe_q",)
+    extra_units = ("-",)
     physics = "core-loss conductance across the magnetising branch, varying with the flux"
     shows_in = "conductance near synchronism (s ~ 0), different at each voltage level"
 
@@ -382,6 +385,7 @@ class TemperatureDrift(AdmittanceEffect):
     size_unit = "K"
     realistic = (3.0, 15.0)
     extra_names = ("td_rise",)
+    extra_units = ("p.u. of first reading's resistance",)
     physics = "winding resistances rise during the test (copper law, one-body thermal model)"
     shows_in = "residual that follows acquisition order; up- vs down-sweep hysteresis"
 
@@ -420,6 +424,7 @@ class LeakageSaturation(AdmittanceEffect):
     size_name = "leakage_fall_at_standstill"
     realistic = (0.01, 0.06)
     extra_names = ("X3_pu", "ls_fall")
+    extra_units = ("p.u. of X2", "p.u. of X1, X2 (fall at I_stall)")
     physics = "leakage reactance falls at high current (L&B: X2 - X3|s|)"
     shows_in = "susceptance at large slip (B too small at s = 2, too large near synchronism)"
 
@@ -466,6 +471,7 @@ class LeakageCoreLoss(AdmittanceEffect):
     size_name = "R2sigma_over_R2"
     realistic = (0.04, 0.2)
     extra_names = ("R2sigma_pu",)
+    extra_units = ("p.u. of R2",)
     physics = "leakage-flux core loss: R1sigma (stator), R2sigma*sign(s) (rotor)"
     shows_in = "susceptance changes sign across s = 0; conductance low at s = 2"
 

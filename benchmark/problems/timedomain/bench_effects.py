@@ -122,6 +122,7 @@ class CurrentSensorSaturation(Effect):
     size_name = "level_over_startup_peak"
     realistic = (0.3, 0.6)
     extra_names = ("cs_level", "cs_sharpness")
+    extra_units = ("p.u. of recorded current peak", "-")
     physics = "phase-current probes compress softly or clip at their range"
     shows_in = "flat-topped start-up current peaks, the same level on each phase"
     measure_stage = 1
@@ -165,6 +166,7 @@ class SpeedSensorGain(Effect):
     size_name = "gain_error"
     realistic = (0.01, 0.05)
     extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos")
+    extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed")
     physics = "tachometer gain error, offset and ripple at the rotation frequency"
     shows_in = "steady speed off synchronous-minus-slip; a constant ratio in the speed residual"
     measure_stage = 3
@@ -238,6 +240,8 @@ class SensorOffset(Effect):
     size_unit = "V"
     realistic = (0.5, 5.0)
     extra_names = ("dv_alpha", "dv_beta", "di_alpha", "di_beta")
+    extra_units = ("p.u. of fundamental voltage amplitude", "p.u. of fundamental voltage amplitude",
+                   "p.u. of recorded current peak", "p.u. of recorded current peak")
     physics = "DC offsets in the voltage (a few V) and current (tenths of A) channels"
     shows_in = "a false DC current; Rs biased up; a DC term in the residual"
     measure_stage = 2
@@ -295,6 +299,7 @@ class TwoMass(Effect):
     size_unit = "Hz"
     realistic = (30.0, 200.0)
     extra_names = ("tm_freq", "tm_ratio", "tm_zeta", "tm_backlash")
+    extra_units = ("Hz", "p.u. of motor inertia", "-", "rad")
     physics = ("motor and load inertias coupled by a torsional spring and damper, with free play (backlash); "
                "speed sensed on the load side")
     shows_in = "speed oscillation and plateaus in the first cycles; torque ripple passed through the coupling"
@@ -351,6 +356,8 @@ class LoadTorque(Effect):
     realistic = (0.05, 0.6)
     extra_names = ("load_const", "load_quad", "load_step", "load_step_time", "load_step_speed", "load_step_tau",
                    "load_step_off")
+    extra_units = ("p.u. of torque scale", "p.u. of torque scale at w_sync", "p.u. of torque scale",
+                   "fraction of record", "fraction of switched load", "s", "fraction of record")
     physics = ("a load torque: constant, ~speed^2, or switched on (and off) at unknown instants through a "
                "first-order rise, in part proportional to speed (a DC machine's armature circuit)")
     shows_in = "steady slip and current rise over a window; a speed dip"
@@ -499,6 +506,7 @@ class ChannelDelay(Effect):
     size_unit = "samples"
     realistic = (0.1, 2.0)
     extra_names = ("skew",)
+    extra_units = ("samples",)
     physics = "a time skew between the voltage and current channels (a multiplexed card's documented sequence)"
     shows_in = "a quadrature residual at the supply frequency"
     measure_stage = 0

@@ -39,6 +39,7 @@ class CoulombFriction(Effect):
     size_name = "fc_over_viscous"
     realistic = (0.2, 1.5)
     extra_names = ("fc_over_viscous",)
+    extra_units = ("p.u. of fv w_sync",)
     physics = "constant friction torque fc*sign(w) (against the case-1 base without it)"
     shows_in = "stop record: straight-line tail instead of exponential; end of start-up"
 
@@ -75,6 +76,7 @@ class DoubleCage(Effect):
     size_name = "resistance_rise"
     realistic = (0.3, 1.5)
     extra_names = ("dc_rise", "dc_tau", "dc_share3", "dc_tau3")
+    extra_units = ("p.u. of low-slip R_R", "s", "fraction of loops 2+3 conductance", "s")
     FORM_DRAWS = {"ladder": {"choice": [False, True]}, "tau2": [0.002, 0.008]}
     physics = "second rotor cage / deep bars: rotor resistance and leakage depend on rotor frequency"
     shows_in = "early start-up (high slip): speed and current envelope"
@@ -208,6 +210,7 @@ class MainSaturation(_Saturation):
     size_name = "extra_magnetising_current"
     realistic = (0.1, 0.6)
     extra_names = ("ms_k", "ms_exp", "ms_k2", "ms_stator_leak")
+    extra_units = ("p.u. of psi_rated/L_M", "-", "p.u. of psi_rated/L_M", "fraction of leakage (stator side)")
     physics = "magnetising inductance falls with flux magnitude"
     shows_in = "steady-state / no-load current amplitude, low-order harmonics"
     prefix = "ms"
@@ -272,6 +275,7 @@ class IronLoss(Effect):
     size_name = "R_fe_over_X_M"
     realistic = (20.0, 100.0)
     extra_names = ("g_fe_pu", "fe_position")
+    extra_units = ("p.u. of 1/(w_e L_M)", "fraction at stator EMF")
     FORM_DRAWS = {"position": [0.0, 1.0]}
     physics = "core-loss resistance across the magnetising branch"
     shows_in = "in-phase no-load current"
@@ -327,6 +331,7 @@ class TemperatureDrift(Effect):
     size_unit = "K"
     realistic = (4.0, 20.0)
     extra_names = ("heating", "rotor_heating")
+    extra_units = ("K", "rotor/stator rise - 1")
     physics = "winding resistances rise during the test (copper law; the rotor by its own factor)"
     shows_in = "residual that grows with test time"
 
@@ -386,6 +391,7 @@ class LeakageSaturation(_Saturation):
     size_name = "extra_current_at_peak"
     realistic = (0.1, 0.5)
     extra_names = ("ls_k", "ls_exp", "ls_floor")
+    extra_units = ("-", "-", "p.u. of unsaturated L_sigma")
     physics = "leakage inductance falls at high current"
     shows_in = "start-up current peaks"
     prefix = "ls"
@@ -475,6 +481,7 @@ class InverterDrop(Effect):
     size_name = "drop_over_dc_link"
     realistic = (0.01, 0.03)
     extra_names = ("U_d_pu",)
+    extra_units = ("p.u. of DC-link voltage",)
     physics = "switch voltage drop and dead time oppose the current sign"
     shows_in = "current-zero-crossing distortion, 6k +/- 1 harmonics"
     FORM_DRAWS = {"smooth": {"choice": [0.0, 0.02, 0.05]}}

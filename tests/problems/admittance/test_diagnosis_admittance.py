@@ -142,3 +142,9 @@ def test_cli_writes_the_diagnosis_and_never_opens_truth(tmp_path):
     assert set(doc["localisation"]["by_slip_region"]) == {"braking", "motoring", "near_synchronism", "generating"}
     assert set(doc["localisation"]["by_channel"]) == {"G", "B"}
     assert (out / "diagnosis.md").is_file() and (out / "residual_map.png").is_file()
+    # each candidate's extra parameters carry their units, in the JSON and in the candidates table
+    lcl = next(r for r in doc["ranking"] if r["effect"] == "leakage_core_loss")
+    assert lcl["extra_parameter_units"] == {"R2sigma_pu": "p.u. of R2"}
+    row = next(line for line in (out / "diagnosis.md").read_text().splitlines()
+               if line.startswith("| leakage_core_loss |"))
+    assert f"R2sigma_pu = {lcl['extra_parameters']['R2sigma_pu']:.4g} p.u. of R2 |" in row

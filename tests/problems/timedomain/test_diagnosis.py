@@ -178,6 +178,15 @@ def test_readme_example_names_double_cage(out):
     assert doc["localisation"]["excess_window"] is not None
     saved = json.loads((out / "dc" / "diagnosis.json").read_text())
     assert saved["verdict"] == "double_cage" and "wall_time_s" in saved
+    # the fitted parameters carry their units (beside value and standard error) into the JSON and the table
+    par = saved["per_effect"][0]["parameters"]
+    assert {k: v["unit"] for k, v in par.items()} == {"dc_rise": "p.u. of low-slip R_R", "dc_tau": "s",
+                                                      "dc_share3": "fraction of loops 2+3 conductance", "dc_tau3": "s"}
+    tau = par["dc_tau"]
+    row = next(line for line in (out / "dc" / "diagnosis.md").read_text().splitlines()
+               if line.startswith("| double_cage |"))
+    assert f"dc_tau = {tau['value']:.4g} s +- {tau['standard_error']:.2g} s," in row
+    assert f"dc_rise = {par['dc_rise']['value']:.4g} p.u. of low-slip R_R +- " in row
     assert "coulomb_friction" in {e["effect"] for e in doc["excluded"]}
 
 

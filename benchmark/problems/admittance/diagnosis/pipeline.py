@@ -396,6 +396,7 @@ def diagnose_sweep(
                 "heldout_chi2_before": float(held_base / n_res),
                 "heldout_chi2_after": float(held_aug / n_res),
                 "extra_parameters": {n: float(v) for n, v in zip(model.extra_names, x_full[5:], strict=True)},
+                "extra_parameter_units": {n: eff.extra_unit(n) for n in model.extra_names},
             }
         )
         fitted[eff.name] = (model, x_full)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from benchmark.core.effects import unit_suffix
 from benchmark.problems.admittance.data import AdmittanceData
 from benchmark.problems.admittance.diagnosis.figures import sweep_figures
 from benchmark.problems.admittance.diagnosis.pipeline import AdmittanceDiagnosisSettings, diagnose_sweep
@@ -107,7 +108,8 @@ def render_sweep_markdown(doc: dict) -> str:
         "|---|---|---|---|---|",
     ]
     for r in doc["ranking"]:
-        extra = ", ".join(f"{k} = {v:.4g}" for k, v in r["extra_parameters"].items())
+        units = r.get("extra_parameter_units") or {}
+        extra = ", ".join(f"{k} = {v:.4g}{unit_suffix(units.get(k))}" for k, v in r["extra_parameters"].items())
         lines.append(
             f"| {r['effect']} | {100 * r['heldout_reduction']:.1f} % "
             f"| {100 * r['in_sample_reduction']:.1f} % | {r['criterion']:.1f} | {extra} |"

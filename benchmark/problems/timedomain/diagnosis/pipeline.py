@@ -129,9 +129,10 @@ def screen(effects: dict[str, Effect], facts: dict) -> tuple[list[Effect], list[
 
 
 def _parameters(model: JointModel, x: np.ndarray, se: np.ndarray, j: int) -> dict:
-    s = model.slices[j]
-    return {n.split(".", 1)[1]: {"value": float(x[k]), "standard_error": float(se[k])}
-            for k, n in zip(range(s.start, s.stop), model.names[s], strict=True)}
+    """Effect ``j``'s extra parameters: value, standard error and unit (:attr:`Effect.extra_units`)."""
+    s, eff = model.slices[j], model.effects[j]
+    return {p: {"value": float(x[k]), "standard_error": float(se[k]), "unit": eff.extra_unit(p)}
+            for k, p in zip(range(s.start, s.stop), (n.split(".", 1)[1] for n in model.names[s]), strict=True)}
 
 
 def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[str, Effect],

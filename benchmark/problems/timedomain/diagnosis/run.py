@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-from benchmark.core.effects import load_effects
+from benchmark.core.effects import load_effects, unit_suffix
 from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
 from benchmark.core.nuisance import refine_nuisance
@@ -127,6 +127,14 @@ def base_identification_lines(bi: dict | None) -> list[str]:
     return lines + stop_record_lines((bi or {}).get("stop_record"))
 
 
+def fitted_parameter(name: str, p: dict) -> str:
+    """``name = value unit +- standard_error unit`` of an effect's fitted extra parameter (``p``:
+    ``value``, ``standard_error``, ``unit``; a dimensionless ``-`` or a document without units
+    shows the bare numbers)."""
+    u = unit_suffix(p.get("unit"))
+    return f"{name} = {p['value']:.4g}{u} +- {p['standard_error']:.2g}{u}"
+
+
 def render_markdown(doc: dict) -> str:
     loc = doc["localisation"]
     gb, ga = doc["gap_before"], doc["gap_after"]
@@ -142,7 +150,7 @@ def render_markdown(doc: dict) -> str:
         lines += ["| effect (in order of selection) | own share (drop-one) | share beside the others (the rule's) "
                   "| fitted parameters (+- standard error) |", "|---|---|---|---|"]
         for pe in doc["per_effect"]:
-            par = ", ".join(f"{k} = {v['value']:.4g} +- {v['standard_error']:.2g}" for k, v in pe["parameters"].items())
+            par = ", ".join(fitted_parameter(k, v) for k, v in pe["parameters"].items())
             lines.append(f"| {pe['effect']} | {100 * pe['drop_one_share']:.0f} % "
                          f"| {100 * pe['share_beside_the_others']:.0f} % | {par} |")
         lines.append(f"\nAn effect earns its place when the model without it is above the noise band and it removes "
