@@ -113,7 +113,7 @@ class _Starts:
     ``min_distance`` (max-norm, normalised units) from every start already taken."""
 
     def __init__(self, evolved, sample, min_distance: float):
-        self.pools = {"evolution": self._ordered(*evolved), "sample": self._ordered(*sample)}
+        self.pools = {"evolution": self._ordered(*evolved), "sample": self._ordered(*sample) if sample else []}
         self.min_distance = float(min_distance)
         self.taken: list[np.ndarray] = []
         self.turn = 0
@@ -156,20 +156,21 @@ def _minima(results, rtol: float) -> list[dict]:
     return groups
 
 
-def _confirmed(best: dict, confirm: int) -> bool:
-    return len(best["kinds"]) >= confirm and "sample" in best["kinds"]
+def _confirmed(best: dict, confirm: int, from_sample: bool = True) -> bool:
+    return len(best["kinds"]) >= confirm and ("sample" in best["kinds"] or not from_sample)
 
 
-def _summary(minima: list[dict], n_starts: int, confirm: int) -> str:
+def _summary(minima: list[dict], n_starts: int, confirm: int, from_sample: bool = True) -> str:
     best = minima[0]
     n_sample = best["kinds"].count("sample")
     head = (f"the best minimum (sum of squares {best['ss']:.6g}) was reached from {len(best['kinds'])} of "
             f"{n_starts} least-squares starts, {n_sample} from the space-filling sample")
     others = ", ".join(f"{m['ss']:.4g} ({len(m['kinds'])})" for m in minima[1:4])
     tail = f"; other minima: {others}" if others else ""
-    if _confirmed(best, confirm):
+    if _confirmed(best, confirm, from_sample):
         return f"converged: {head} ({best['message']}){tail}"
-    return (f"not confirmed: {head} (confirmation needs {confirm}, one from the sample){tail}; it may not "
+    need = f"{confirm}, one from the sample" if from_sample else str(confirm)
+    return (f"not confirmed: {head} (confirmation needs {need}){tail}; it may not "
             f"be the global minimum: try {ADVICE}")
 
 
@@ -221,6 +222,7 @@ def minimize(
     crossover: float = 0.9,
     starts: int = 16,
     confirm: int = 2,
+    sample_starts: bool = True,
     local_fraction: float = 0.2,
     cost_fraction: float = 0.2,
     cost_sigma: float = 2.0,
@@ -241,6 +243,8 @@ def minimize(
         raise ValueError(f"multistart: global_fraction must be in (0, 1], got {global_fraction}")
     if int(starts) < 1 or int(confirm) < 1:
         raise ValueError(f"multistart: starts and confirm must be >= 1, got {starts}, {confirm}")
+    if not 0.0 <= float(cost_fraction) <= 1.0:
+        raise ValueError(f"multistart: cost_fraction must be in [0, 1], got {cost_fraction}")
     if not 0.0 < float(local_fraction) <= 1.0:
         raise ValueError(f"multistart: local_fraction must be in (0, 1], got {local_fraction}")
     rng = np.random.default_rng(seed)
@@ -273,7 +277,8 @@ def minimize(
 
     results = []  # (sum of squares, u, kind, scipy message)
     nit, message = gens, ""
-    queue = _Starts(evolved, sample, min_distance)
+    queue = _Starts(evolved, sample if sample_starts else None, min_distance)
+    from_sample = bool(sample_starts)
     while len(results) < int(starts):
         nxt = queue.next()
         if nxt is None:
@@ -295,20 +300,22 @@ def minimize(
         try:
             sol = least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale="jac", ftol=ftol,
                                 xtol=xtol, gtol=gtol,
-                                max_nfev=max(1, min(problem.remaining, per_start) // (problem.n_var + 1)))
+                                max_nfev=max(1, problem.remaining if local_fraction >= 1
+                                             else min(problem.remaining, per_start) // (problem.n_var + 1)))
         except BudgetExhausted:
             message = f"evaluation budget spent in local start {len(results) + 1}"
             break
         nit += int(sol.nfev)
         results.append((float(sol.cost * 2), sol.x, kind, sol.message, sol.jac))
-        if _confirmed(_minima(results, agree_rtol)[0], int(confirm)):
+        if _confirmed(_minima(results, agree_rtol)[0], int(confirm), from_sample):
             break
     if not results:
         return OptimizerOutput(x=None, nit=nit, message=message or "no local start completed")
     minima = _minima(results, agree_rtol)
-    summary = _summary(minima, len(results), int(confirm))
+    summary = _summary(minima, len(results), int(confirm), from_sample)
     if message:
         return OptimizerOutput(x=coords.to_x(minima[0]["u"]), nit=nit, message=f"{message}; {summary}")
-    note = _cost_stage(problem, coords, minima[0], int(rng.integers(2**31)),
-                       min(problem.remaining, int(float(cost_fraction) * total)), float(cost_sigma), float(cost_rtol))
+    cost_budget = min(problem.remaining, int(float(cost_fraction) * total))
+    note = "" if cost_budget <= 0 else _cost_stage(problem, coords, minima[0], int(rng.integers(2**31)), cost_budget,
+                                                   float(cost_sigma), float(cost_rtol))
     return OptimizerOutput(x=coords.to_x(minima[0]["u"]), nit=nit, message=f"{summary}; {note}" if note else summary)
