@@ -20,7 +20,7 @@ from benchmark.analysis.runs import Run
 from benchmark.analysis.targets import instance_targets
 from benchmark.studies.suite import cli
 from benchmark.studies.suite.jobs import jobs_for
-from benchmark.studies.suite.measures import PRECISIONS, InstanceResult, SuiteRun, ecdf_curve, ert_at, summary
+from benchmark.studies.suite.measures import InstanceResult, SuiteRun, ecdf_curve, ert_at, summary
 from benchmark.studies.suite.spec import load_suite
 
 TINY = {
