@@ -1,7 +1,9 @@
 """``python -m benchmark``: one identification run (or a sweep with ``-m``).
 
-With no arguments it makes the paper's synthetic case (Alonge et al. 1998, noise-free) and
-identifies it with the GENESIS clone at the paper's settings. See README for the options.
+With no arguments it makes the paper's noise-free synthetic start-up (Alonge et al. 1998) and
+identifies it with the default pipeline (``multistart``: differential evolution, then least
+squares from several starts); ``optimizer=genesis`` runs the paper's GA. A thin shell over
+:func:`benchmark.api.identify`'s path: the same configuration gives the same numbers.
 
 Exit status: 0 when the run finished (``budget_spent`` or ``converged``), 2 for a data or
 configuration error, 3 when a single run was recorded as ``failed`` or ``timeout`` (its
@@ -17,23 +19,33 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 
+from benchmark.api import identification_of
 from benchmark.core.cli import run_hydra_main, user_errors
-from benchmark.core.harness import format_table, run
+from benchmark.core.config_files import CONFIG_DIR
+from benchmark.core.harness import run
+
+TITLE = ("imbench: identify the parameters of an induction-motor model from a start-up record (Alonge et al. "
+         "1998)\nor a slip sweep (Lindsay and Barton 1972), and say how good the fit is.")
+USAGE = ("python -m benchmark [group=option ...] [key=value ...]          one run -> outputs/.../result.json",
+         "python -m benchmark -m optimizer=deap,cmaes seed='range(5)'      a sweep -> multirun/...")
+FOOTER = ("", "Other commands (each with --help): python -m benchmark.diagnose (why the model misses the data),",
+          "python -m benchmark.report DIR (tabulate a sweep), python -m synthetic (write a data set),",
+          "python -m benchmark.blind (the diagnosis evaluated blind). The user guide: README.md and docs/.")
 
 
-@hydra.main(version_base="1.3", config_path="../conf", config_name="config")
+@hydra.main(version_base="1.3", config_path=str(CONFIG_DIR), config_name="config")
 @user_errors
 def main(cfg) -> float | None:
     outdir = Path(HydraConfig.get().runtime.output_dir)
-    outcome = run(cfg, outdir)
-    rec = outcome.record
+    result = identification_of(run(cfg, outdir), outdir)
+    rec = result.record
     if HydraConfig.get().mode == RunMode.MULTIRUN:  # a sweep: one line per run, not interleaved tables
         # One write of the whole line: the sweep's workers share one pipe, and print's separate
         # newline write let two lines run together.
         sys.stdout.write(one_line(rec, outdir) + "\n")
         sys.stdout.flush()
         return rec["cost"]
-    print(format_table(rec))
+    print(result)
     print(f"result: {outdir / 'result.json'}")
     if (rec.get("figures") or {}).get("report"):
         print(f"report: {outdir / rec['figures']['report']} (figures)")
@@ -52,4 +64,4 @@ def one_line(rec: dict, outdir: Path) -> str:
 
 
 if __name__ == "__main__":
-    run_hydra_main(main)
+    run_hydra_main(main, "config", TITLE, USAGE, FOOTER)

@@ -20,6 +20,7 @@ import hydra
 
 from benchmark.analysis import blind
 from benchmark.core.cli import run_hydra_main, user_errors
+from benchmark.core.config_files import CONFIG_DIR
 
 MOTOR_KEYS = ("R1", "R2", "X", "R0", "X0")
 
@@ -41,7 +42,12 @@ def set_config(settings: blind.BlindSettings, d: dict):
     return blind.generator_config(settings, d, scale_motor=_scale_machine, no_effect=["none"])
 
 
-@hydra.main(version_base="1.3", config_path="../conf", config_name="blind_admittance")
+TITLE = ("imbench blind evaluation of the slip-sweep diagnosis: sweeps with a drawn effect (or none), their\n"
+         "truth kept apart, each diagnosed from its data folder alone, the verdicts scored.")
+USAGE = ("python -m benchmark.blind_admittance n=60 seed=2024 out=results/blind_admittance",)
+
+
+@hydra.main(version_base="1.3", config_path=str(CONFIG_DIR), config_name="blind_admittance")
 @user_errors
 def main(cfg) -> None:
     from synthetic.admittance import generate
@@ -52,4 +58,4 @@ def main(cfg) -> None:
 
 
 if __name__ == "__main__":
-    run_hydra_main(main)
+    run_hydra_main(main, "blind_admittance", TITLE, USAGE, sections=())

@@ -1,4 +1,4 @@
-"""Synthetic Lindsay-Barton slip sweeps (the README's data sets, kind ``admittance``).
+"""Synthetic Lindsay-Barton slip sweeps (docs/data_format.md, kind ``admittance``).
 
 The bench: the machine is held by a speed-controlled work machine and ramped at
 ``test.ramp_rpm_per_s`` from ``speed_start_rpm`` to ``speed_stop_rpm`` at constant phase voltage,
@@ -208,7 +208,12 @@ def _thermal_for_rise(session_temperatures, thermal: ThermalModel, theta0: float
 
 
 def make_dataset(run) -> tuple[AdmittanceData, dict]:
-    """The sweep data set and its truth document for the composed config (motor preset + noise)."""
+    """The sweep data set and its truth document for the composed config (motor preset + noise);
+    a ``kind: loadtest`` preset makes a test report instead (:mod:`synthetic.loadtest`)."""
+    if _sel(run, "motor.kind") == "loadtest":
+        from synthetic.loadtest import make_dataset as make_report
+
+        return make_report(run)
     params = parameters_from_config(run)
     f = float(_sel(run, "motor.frequency", 60.0))
     p = int(_sel(run, "motor.pole_pairs", 2))
@@ -385,5 +390,9 @@ def make_dataset(run) -> tuple[AdmittanceData, dict]:
 
 def generate(run, outdir: Path) -> Path:
     """Write the data set of :func:`make_dataset` (section 7 format + truth.yaml) to ``outdir``."""
+    if _sel(run, "motor.kind") == "loadtest":
+        from synthetic.loadtest import generate as write_report
+
+        return write_report(run, outdir)
     data, truth = make_dataset(run)
     return write_admittance(Path(outdir), data, truth=truth)

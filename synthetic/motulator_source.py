@@ -26,6 +26,10 @@ Effects motulator provides: ``main_saturation`` (its saturable Gamma model,
 ``L_s(psi) = L_u/(1 + (psi/psi_k)**S)``), ``two_mass`` (its two-mass mechanics, speed
 sensed on the load side) and ``load_torque``. Coulomb friction is motulator's speed-dependent
 friction coefficient ``B_L(|w|) = fv + fc/max(|w|, eps)`` (``eps`` = :data:`COULOMB_SMOOTHING`).
+Held-out forms (for scoring only, :mod:`synthetic.motulator_effects`; option ``form``):
+``main_saturation`` ``steel_gap`` (gap plus M800-50A iron), ``two_mass`` ``elastomer``
+(progressive coupling), ``load_torque`` ``dc_generator`` (a DC generator with its armature
+circuit as an extra state).
 """
 
 from __future__ import annotations
@@ -36,12 +40,18 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from synthetic.motulator_effects import (
+    COULOMB_SMOOTHING,
+    EFFECTS,  # noqa: F401 (re-exported: the effects this source offers)
+    M800_50A,
+    effect_specs,
+    mechanics,
+    steel_gap_inductance,
+)
+
 SCENARIOS = ("dol", "six_step", "pwm")
-EFFECTS = ("main_saturation", "two_mass", "load_torque")
 PARAMETER_NAMES = ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")
 SIX_STEP_SEQUENCE = ((1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 1, 1), (0, 0, 1), (1, 0, 1))
-#: Speed (mechanical rad/s) below which Coulomb friction is linear (viscous) in the plant.
-COULOMB_SMOOTHING = 1e-3
 #: Counter levels of motulator's carrier comparison (duty ratios are quantised to these).
 PWM_LEVELS = 2**12
 INSTALL_HINT = "motulator is not installed: pip install -e .[validation]"
@@ -142,79 +152,6 @@ def _excitation(m: dict, scenario: str, Ts: float, n: int) -> dict:
     u_abc -= 0.5 * (u_abc.max(axis=0) + u_abc.min(axis=0))
     duty = np.round(PWM_LEVELS * np.clip(u_abc / Ed + 0.5, 0, 1)) / PWM_LEVELS
     return {"duty": duty.T, "Ed": Ed, "hold": "zoh", "f": f, "amp": amp}
-
-
-# -- effects ---------------------------------------------------------------------------
-
-def _effects(effects: dict | None, m: dict, exc: dict, duration: float) -> list[dict]:
-    """Validate the requested effects and fill in their defaults (sizes and forms)."""
-    out = []
-    for name, opts in dict(effects or {}).items():
-        opts = dict(opts or {})
-        if name not in EFFECTS:
-            raise ValueError(f"effect {name!r} is not available from the motulator source (it offers "
-                             f"{', '.join(EFFECTS)}); use the project's independent plant for the others")
-        if name == "main_saturation":
-            size, S = float(opts.get("size", np.sqrt(0.1 * 0.6))), float(opts.get("exponent", 7.0))
-            psi_n = exc["amp"] / (2 * np.pi * exc["f"])
-            form = {"exponent": S, "rated_flux": psi_n, "L_unsaturated": m["par"]["Ls"] * (1 + size),
-                    "knee_flux": psi_n * size ** (-1 / S) if size > 0 else float("inf")}
-            out.append({"name": name, "size": size, "size_name": "extra magnetising current at rated flux",
-                        "unit": "fraction", "form": form})
-        elif name == "two_mass":
-            size = float(opts.get("size", 0.5))
-            if not 0 < size < 1:
-                raise ValueError(f"two_mass: size (load share of the inertia) must be in (0, 1), got {size}")
-            f_r, zeta = float(opts.get("resonance_hz", 30.0)), float(opts.get("damping_ratio", 0.05))
-            J = m["par"]["J"]
-            J_L, J_eq = size * J, size * (1 - size) * J  # J_eq = J_M J_L / (J_M + J_L)
-            K_S = (2 * np.pi * f_r) ** 2 * J_eq
-            form = {"resonance_hz": f_r, "damping_ratio": zeta, "J_M": J - J_L, "J_L": J_L, "K_S": K_S,
-                    "C_S": 2 * zeta * np.sqrt(K_S * J_eq)}
-            out.append({"name": name, "size": size, "size_name": "load-side share of the inertia",
-                        "unit": "fraction", "form": form})
-        else:
-            kind = opts.get("form", "step")
-            if kind not in ("step", "constant", "quadratic"):
-                raise ValueError(f"load_torque: form must be step, constant or quadratic, got {kind!r}")
-            torque = opts.get("torque")
-            if torque is None:
-                if m["rated_torque"] is None:
-                    raise ValueError("load_torque: give torque (N m), or the motor's rated_torque or rated_power")
-                torque = float(opts.get("size", 0.5)) * m["rated_torque"]
-            form = {"form": kind, "torque": float(torque), "time": float(opts.get("time", 0.6 * duration))}
-            out.append({"name": name, "size": float(torque), "size_name": "load torque (at synchronous speed "
-                        "for quadratic)", "unit": "N m", "form": form})
-    return out
-
-
-def _mechanics(mt: dict, m: dict, eff: dict, exc: dict, stop_at: float | None = None):
-    """motulator mechanics with friction, load torque and the two-mass shaft as requested.
-
-    ``stop_at`` (s): build the mechanics of the free stop that follows a start-up of that
-    length; a load already applied then stays on as a passive (motion-opposing) torque."""
-    par = m["par"]
-    fv, fc, eps = par["fv"], par["fc"], COULOMB_SMOOTHING
-    load, k_quad, fc_load = eff.get("load_torque"), 0.0, 0.0
-    tau_L = lambda t: 0 * np.asarray(t)  # noqa: E731
-    if load is not None:
-        T, t0 = load["form"]["torque"], load["form"]["time"]
-        if load["form"]["form"] == "quadratic":
-            k_quad = T / (2 * np.pi * exc["f"] / m["p"]) ** 2
-        elif load["form"]["form"] == "constant" or (stop_at is not None and t0 <= stop_at):
-            fc_load = T  # a passive load: opposes the motion, like Coulomb friction
-        elif stop_at is None:
-            tau_L = lambda t: T * (np.asarray(t) >= t0)  # noqa: E731
-
-    def B_L(a):
-        return fv + (fc + fc_load) / np.maximum(a, eps) + k_quad * a
-
-    tm = eff.get("two_mass")
-    if tm is None:
-        return mt["model"].StiffMechanicalSystem(J=par["J"], B_L=B_L, tau_L=tau_L)
-    fm = tm["form"]
-    pars = mt["TwoMassPars"](J_M=fm["J_M"], J_L=fm["J_L"], K_S=fm["K_S"], C_S=fm["C_S"], B_L=B_L)
-    return mt["model"].TwoMassMechanicalSystem(pars, tau_L=tau_L)
 
 
 # -- simulation ------------------------------------------------------------------------
@@ -365,12 +302,15 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
         Direct-on-line sine start, six-step inverter start, or sine-PWM inverter start.
     effects : dict or None
         ``{name: options}`` for ``main_saturation`` (``size``: extra magnetising current at
-        rated flux, fraction; ``exponent``), ``two_mass`` (``size``: load-side share of the
-        inertia; ``resonance_hz``; ``damping_ratio``; friction acts on, and the speed is
-        sensed on, the load side), ``load_torque`` (``form``: ``step``, an active torque from
-        ``time`` s; ``constant``, a passive motion-opposing torque from the start;
-        ``quadratic``, ``k*w**2`` reaching ``torque`` at synchronous speed; ``torque`` N m or
-        ``size`` fraction of rated torque, default 0.5).
+        rated flux, fraction; ``exponent``; held out: ``form: steel_gap`` with ``iron_ratio``),
+        ``two_mass`` (``size``: load-side share of the inertia; ``resonance_hz``;
+        ``damping_ratio``; friction acts on, and the speed is sensed on, the load side; held
+        out: ``form: elastomer`` with ``hardening``), ``load_torque`` (``form``: ``step``, an
+        active torque from ``time`` s; ``constant``, a passive motion-opposing torque from the
+        start; ``quadratic``, ``k*w**2`` reaching ``torque`` at synchronous speed; held out,
+        ``dc_generator`` closed at ``time`` s with ``emf`` V at synchronous speed,
+        ``armature_time_constant`` s and ``brush_drop`` V, ``torque`` its steady torque at
+        synchronous speed; ``torque`` N m or ``size`` fraction of rated torque, default 0.5).
     noise : dict or None
         ``current_std`` (A, white), ``current_colored_std`` (A) with
         ``current_colored_bandwidth`` (Hz, first-order, default 50), ``voltage_std`` (V), ``speed_std``
@@ -407,19 +347,23 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
     Ts = 1.0 / float(sample_rate)
     n = int(round(duration * sample_rate)) + 1
     exc = _excitation(m, scenario, Ts, n)
-    eff_list = _effects(effects, m, exc, duration)
+    eff_list = effect_specs(effects, m, exc, duration)
     eff = {e["name"]: e for e in eff_list}
     g = gamma_from_project(m["par"])
     L_s = g["L_s"]
     if "main_saturation" in eff:
         fm = eff["main_saturation"]["form"]
-        L_u, psi_k, S = fm["L_unsaturated"], fm["knee_flux"], fm["exponent"]
-        L_s = lambda psi: L_u / (1 + (np.asarray(psi) / psi_k) ** S)  # noqa: E731
+        if fm.get("form") == "steel_gap":
+            L_s, curve = steel_gap_inductance(L_s, fm["rated_flux"], eff["main_saturation"]["size"], fm["iron_ratio"])
+            fm["flux_density"] = float(fm["rated_flux"] * M800_50A[-1, 0] / curve.table[1][-1])
+        else:
+            L_u, psi_k, S = fm["L_unsaturated"], fm["knee_flux"], fm["exponent"]
+            L_s = lambda psi: L_u / (1 + (np.asarray(psi) / psi_k) ** S)  # noqa: E731
     par = mt["ImPars"](n_p=m["p"], R_s=g["R_s"], R_r=g["R_r"], L_ell=g["L_ell"], L_s=L_s)
     SineSource, OpenStator = _source_classes(mt)
     conv = SineSource(exc["u"]) if scenario == "dol" else mt["model"].VoltageSourceConverter(u_dc=exc["Ed"])
     machine = mt["model"].InductionMachine(par)
-    mech = _mechanics(mt, m, eff, exc)
+    mech = mechanics(mt, m, eff, exc)
     _simulate(mt, conv, machine, mech, Ts, n, exc.get("duty"), pwm=scenario == "pwm")
 
     tt = np.arange(n) * Ts
@@ -440,9 +384,13 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
     if stop:
         Tq = 1.0 / float(stop_sample_rate)
         w0 = float(getattr(mech.data, w_key)[-1])
-        ns = int(round(_coast_time(m["par"], abs(w0), stop_max_duration) / Tq)) + 1
+        coast = dict(m["par"])
+        if "load_torque" in eff and eff["load_torque"]["form"]["form"] == "dc_generator":
+            g = eff["load_torque"]["form"]["generator"]
+            coast["fv"] += g["k_e"] ** 2 / g["R_a"]  # the generator brakes like a viscous torque
+        ns = int(round(_coast_time(coast, abs(w0), stop_max_duration) / Tq)) + 1
         mech_state = {k: getattr(mech.data, k)[-1] for k in vars(mech.sol_states)}
-        mech2 = _mechanics(mt, m, eff, exc, stop_at=duration)
+        mech2 = mechanics(mt, m, eff, exc, stop_at=duration)
         mech2.state.__dict__.update(mech_state)
         if stop_mode == "open":
             mach2, conv2, duty2 = OpenStator(), mt["model"].VoltageSourceConverter(u_dc=0.0), None

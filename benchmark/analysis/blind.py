@@ -14,6 +14,13 @@ the truth afterwards. Sources:
 * ``motulator``: the third-party simulator (:mod:`synthetic.motulator_source`; effects
   ``main_saturation``, ``two_mass``, ``load_torque``).
 
+Forms (``forms=development|heldout|all``, default ``development``): the independent plant and
+motulator draw their effects' forms from the development forms (those the diagnosis was
+developed on, the behaviour before the split), the held-out forms (second physical forms,
+for the final scoring only) or both; the split is :mod:`synthetic.independent.forms`
+(``docs/effect_forms.md``). The own plant's forms are the diagnosis's own: it has no held-out
+forms, and ``forms=heldout`` is refused for it.
+
 Scores (:func:`summarise`): a verdict counts right when its effect set equals the injected
 set (``none`` for an effect-free set; an extra name is a miss; ``unexplained`` names no
 effect), whatever its status; with Wilson 95 % intervals. False alarms: effect-free sets
@@ -51,6 +58,18 @@ def _float_or_none(v) -> float | None:  # noqa: D103
     return None if v is None else float(v)
 
 
+def _form_set(v) -> str:
+    """The ``forms`` key: ``development`` (default), ``heldout`` or ``all``."""
+    from synthetic.independent.forms import FORM_SETS
+
+    v = "development" if v is None else str(v)
+    if v not in FORM_SETS:
+        from benchmark.core.errors import ConfigError
+
+        raise ConfigError(f"forms: one of {list(FORM_SETS)}, got {v!r}")
+    return v
+
+
 @dataclass(frozen=True)
 class BlindSettings:
     """What a blind evaluation draws, where it works and what it writes; made once from the
@@ -66,6 +85,8 @@ class BlindSettings:
         with the weight of one effect among the drawn outcomes (the slip sweep).
     two_share : share of the other sets that carry two effects at once (with ``free_share``).
     vary_form : vary each injected effect's form (the effect's own :meth:`random_form`).
+    forms : the form set of the plant and motulator sources (``development``, ``heldout``,
+        ``all``; see the module docstring).
     vary_motor : relative spread of the motor's parameters, each scaled by exp(U(-v, v)).
     exclude_effects : effects never injected.
     only_effects : if not empty, the only effects injected (the others are never drawn).
@@ -103,6 +124,7 @@ class BlindSettings:
     free_share: float | None = None
     two_share: float = 0.0
     vary_form: bool = True
+    forms: str = "development"
     vary_motor: float = 0.0
     exclude_effects: tuple[str, ...] = ()
     only_effects: tuple[str, ...] = ()
@@ -131,7 +153,8 @@ class BlindSettings:
             n=int(run["n"]), seed=int(run["seed"]), workdir=Path(run["workdir"]), out=Path(run["out"]),
             source=str(run.get("source", "own")), free_share=_float_or_none(run.get("free_share")),
             two_share=float(run.get("two_share") or 0.0),
-            vary_form=bool(run.get("vary_form", True)), vary_motor=float(run.get("vary_motor") or 0.0),
+            vary_form=bool(run.get("vary_form", True)), forms=_form_set(run.get("forms")),
+            vary_motor=float(run.get("vary_motor") or 0.0),
             exclude_effects=tuple(str(e) for e in run.get("exclude_effects") or ()),
             only_effects=tuple(str(e) for e in run.get("only_effects") or ()),
             cycle_effects=bool(run.get("cycle_effects") or False),

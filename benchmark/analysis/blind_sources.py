@@ -9,6 +9,10 @@ Each source is a function of the :class:`~benchmark.analysis.blind.BlindSettings
 * ``plant``: the independent flux-linkage plant (:mod:`synthetic.independent`);
 * ``motulator``: the third-party simulator (effects ``main_saturation``, ``two_mass``,
   ``load_torque``).
+
+The plant and motulator draw their forms from ``settings.forms`` (development, held-out or
+all: :mod:`synthetic.independent.forms`); with ``development`` every draw is the one it was
+before the held-out forms existed. The own plant has no held-out forms.
 """
 
 from __future__ import annotations
@@ -37,6 +41,11 @@ def own_source(settings: BlindSettings):
     """(draws, make(d, folder)) of the project's own synthetic plant."""
     from synthetic.timedomain import generate
 
+    if settings.forms == "heldout":
+        from benchmark.core.errors import ConfigError
+
+        raise ConfigError("forms=heldout: the own plant's forms are the diagnosis's own effect models, it has no "
+                          "held-out forms; use source=plant or source=motulator")
     draws = draw_sets(settings, exclude=settings.in_base)
 
     def make(d, folder):
@@ -63,7 +72,7 @@ def plant_source(settings: BlindSettings):
             chosen = [cycled(i, settings, allowed)]
             if EFFECTS[chosen[0]].inverter_only and kind == "dol":
                 kind = str(rng.choice(["six_step", "pwm"]))
-        spec = draw_blind_set(rng, effects=chosen, scenario=kind)
+        spec = draw_blind_set(rng, effects=chosen, scenario=kind, forms=settings.forms)
         if settings.plant_duration:  # default: the plant's own draw (0.8-1.5 s: big motors need it)
             spec["scenario"]["duration"] = settings.plant_duration
         if not settings.plant_stop:
@@ -106,9 +115,38 @@ def motulator_motor(settings: BlindSettings, name: str) -> tuple[dict, float]:
     return motor, float(scale)
 
 
+def motulator_options(rng: np.random.Generator, name: str, forms: str, duration: float) -> dict:
+    """The options of effect ``name`` of a motulator draw, its form from the form set ``forms``
+    (:func:`synthetic.independent.forms.motulator_forms_of`; a single development form takes
+    no draw, so that ``development`` draws are the ones made before the split)."""
+    from synthetic.independent.forms import motulator_forms_of
+
+    pool = motulator_forms_of(name, forms)
+    form = pool[0] if len(pool) == 1 else str(rng.choice(pool))
+    if name == "main_saturation":
+        if form == "steel_gap":
+            return {"form": form, "size": float(rng.uniform(0.15, 0.5)),
+                    "iron_ratio": float(np.exp(rng.uniform(np.log(150.0), np.log(500.0))))}
+        return {"size": float(rng.uniform(0.15, 0.5)), "exponent": float(rng.choice(MOTULATOR_SATURATION_EXPONENTS))}
+    if name == "two_mass":
+        opts = {"size": float(rng.uniform(0.3, 0.6)), "resonance_hz": float(rng.uniform(15, 40)),
+                "damping_ratio": float(rng.uniform(0.05, 0.2))}
+        if form == "elastomer":
+            opts.update(form=form, hardening=float(rng.uniform(1.5, 3.0)))
+        return opts
+    opts = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
+    if form == "step":
+        opts["time"] = float(rng.uniform(0.3, 0.6) * duration)
+    if form == "dc_generator":
+        opts.update(time=0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.6) * duration),
+                    armature_time_constant=float(np.exp(rng.uniform(np.log(2e-3), np.log(2e-2)))),
+                    emf=float(rng.uniform(100.0, 250.0)), brush_drop=float(rng.uniform(1.0, 2.0)))
+    return opts
+
+
 def motulator_source(settings: BlindSettings):
     """(draws, make) of motulator: a motor of ``settings.motulator_motors`` (:func:`motulator_motor`)
-    spread, dol or six-step, its three effects."""
+    spread, dol or six-step, its three effects (forms from ``settings.forms``)."""
     from synthetic.motulator_source import make_motulator_dataset
 
     motors = {name: motulator_motor(settings, name) for name in settings.motulator_motors}
@@ -120,19 +158,7 @@ def motulator_source(settings: BlindSettings):
         k = n_effects_of(i, settings)
         chosen = sorted(str(e) for e in rng.choice(MOTULATOR_EFFECTS, size=k, replace=False)) if k else []
         factors = {m: float(np.exp(rng.uniform(-spread, spread))) for m in MOTOR_KEYS}
-        opts = {}
-        for e in chosen:
-            if e == "main_saturation":
-                opts[e] = {"size": float(rng.uniform(0.15, 0.5)),
-                           "exponent": float(rng.choice(MOTULATOR_SATURATION_EXPONENTS))}
-            elif e == "two_mass":
-                opts[e] = {"size": float(rng.uniform(0.3, 0.6)), "resonance_hz": float(rng.uniform(15, 40)),
-                           "damping_ratio": float(rng.uniform(0.05, 0.2))}
-            else:
-                form = str(rng.choice(["step", "constant", "quadratic"]))
-                opts[e] = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
-                if form == "step":
-                    opts[e]["time"] = float(rng.uniform(0.3, 0.6) * settings.duration)
+        opts = {e: motulator_options(rng, e, settings.forms, settings.duration) for e in chosen}
         scenario = str(rng.choice(["dol", "six_step"]))
         noise = {"current_std": float(rng.uniform(0.02, 0.08)), "current_colored_std": float(rng.uniform(0.0, 0.05)),
                  "speed_std": float(rng.uniform(0.05, 0.2)), "speed_quantum": float(rng.choice([0.0, 0.1, 0.5]))}

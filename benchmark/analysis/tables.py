@@ -41,6 +41,9 @@ def _accuracy_table(grp: list[Row], params: list[str], tol: float) -> tuple[list
 
 
 def _budget_table(grp: list[Row], budgets) -> tuple[list[str], list[list[str]]]:
+    # a fixed budget no run of the group reached (a sweep at budget 2000 against the default
+    # 5000-60000) would be a column of dashes: left out
+    budgets = [b for b in budgets if any(r.values[f"cost_at_{b}_n"] for r in grp)]
     head = ["optimizer", "target reached", "median evaluations to target", "ERT"] + [
         f"best cost at {b}" for b in budgets
     ]

@@ -11,6 +11,7 @@ import os
 import sys
 import traceback
 import warnings
+from collections.abc import Sequence
 
 from benchmark.core.errors import ImbenchWarning, UserError
 
@@ -55,13 +56,38 @@ def user_errors(fn):
     return wrapper
 
 
-def run_hydra_main(main) -> None:
-    """Call a ``@hydra.main`` function; Hydra's own configuration errors (an unknown
-    optimiser or problem name, a misspelt key; Hydra prints the valid choices) exit with
-    status 2 like every other user error. With ``IMBENCH_DEBUG=1`` Hydra shows its full
-    stack traces too (``HYDRA_FULL_ERROR=1``)."""
+def run_hydra_main(main, config_name: str, title: str, usage: Sequence[str], footer: Sequence[str] = (),
+                   sections: Sequence[str] = ("problem", "optimizer")) -> None:
+    """Call a ``@hydra.main`` function whose primary configuration is ``conf/<config_name>.yaml``.
+
+    ``--help`` prints the entry point's own help (:func:`benchmark.core.config_help.config_help`:
+    ``title``, ``usage`` lines, its keys, those of the groups in ``sections``, the groups,
+    ``footer``). Before Hydra composes, the overrides are checked
+    (:func:`benchmark.core.config_files.compose_config`): a misspelt key or option, with or
+    without ``+``, is one line naming it and the nearest known one, exit status 2; so are
+    Hydra's own configuration errors. With ``IMBENCH_DEBUG=1`` Hydra shows its full stack
+    traces too (``HYDRA_FULL_ERROR=1``)."""
     if debug():
         os.environ.setdefault("HYDRA_FULL_ERROR", "1")
+    from hydra._internal.utils import get_args_parser
+
+    args, _ = get_args_parser().parse_known_args(sys.argv[1:])
+    name = args.config_name or config_name
+    try:
+        if args.help:
+            from benchmark.core.config_help import config_help
+
+            print(config_help(name, title, usage, args.overrides, footer, sections), end="")
+            sys.exit(0)
+        if not (args.hydra_help or args.info or args.shell_completion or args.config_dir or args.config_path):
+            from benchmark.core.config_files import compose_config
+
+            compose_config(name, args.overrides)
+    except UserError as exc:
+        if debug():
+            raise
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
     try:
         main()
     except SystemExit as exc:

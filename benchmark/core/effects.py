@@ -20,14 +20,14 @@ naming it with ``_target_``; :func:`load_effects` builds them all.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import yaml
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.errors import ConfigError
 
-CONF_EFFECTS = Path(__file__).resolve().parents[2] / "conf" / "effect"
+CONF_EFFECTS = CONFIG_DIR / "effect"
 
 
 @dataclass(frozen=True)

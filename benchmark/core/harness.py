@@ -9,10 +9,7 @@ problem, ``cfg.optimizer.plugin`` the optimiser. The harness counts evaluations 
 from __future__ import annotations
 
 import contextlib
-import difflib
 import functools
-import importlib
-import inspect
 import json
 import math
 import platform
@@ -29,6 +26,8 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from benchmark.core.budget import BudgetedProblem, run_plugin
+from benchmark.core.commands import run_overrides
+from benchmark.core.config_checks import resolve_budget, validate_config
 from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
 from benchmark.core.io import write_table_atomic, write_text_atomic
@@ -38,6 +37,7 @@ from benchmark.core.problem import OptimizeResult, Problem, Status
 from benchmark.core.progress import ProgressBar, progress_wanted
 from benchmark.core.quality import assess
 from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
+from benchmark.core.review import review
 from benchmark.core.tables import table_size_limit
 from benchmark.core.threads import one_blas_thread
 
@@ -54,98 +54,6 @@ class RunOutcome:
     problem: Problem
     result: OptimizeResult
     record: dict
-
-
-def resolve_budget(cfg: DictConfig) -> int:
-    budget = cfg.get("budget")
-    if budget is None:
-        budget = cfg.optimizer.get("default_budget")
-        key = "optimizer.default_budget"
-    else:
-        key = "budget"
-    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
-        raise ConfigError(f"{key}: must be a positive whole number of evaluations, got {budget!r}")
-    return budget
-
-
-def validate_config(cfg: DictConfig) -> None:
-    """Catch configuration mistakes before any work starts (no data read, nothing simulated):
-    groups present, seed, budget, polish, time limit, checkpoint keys, the shape of
-    ``bounds``, the problem's own checks (``check_config`` in the module of its set-up
-    function) and the optimiser plugin (importable, options it accepts)."""
-    for key in ("problem", "optimizer", "motor"):
-        if key not in cfg or cfg[key] is None:
-            raise ConfigError(f"{key}: missing config group")
-    check_top_level_keys(cfg)
-    if "plugin" not in cfg.optimizer or "_target_" not in cfg.optimizer.plugin:
-        raise ConfigError("optimizer.plugin._target_: the optimiser config must name its plugin function")
-    if "setup" not in cfg.problem or "_target_" not in cfg.problem.setup:
-        raise ConfigError("problem.setup._target_: the problem config must name its set-up function")
-    seed = cfg.get("seed")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ConfigError(f"seed: must be a non-negative integer, got {seed!r}")
-    resolve_budget(cfg)
-    if cfg.get("polish"):
-        pb = cfg.get("polish_budget")
-        if isinstance(pb, bool) or not isinstance(pb, int) or pb < 1:
-            raise ConfigError(f"polish_budget: must be a positive whole number, got {pb!r}")
-    limit = cfg.get("time_limit_s")
-    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
-                              or not math.isfinite(limit) or limit <= 0):
-        raise ConfigError(f"time_limit_s: must be a positive number of seconds or null, got {limit!r}")
-    for key in ("resume", "checkpoint", "polish", "figures"):
-        v = cfg.get(key)
-        if v is not None and not isinstance(v, bool):
-            raise ConfigError(f"{key}: must be true or false, got {v!r}")
-    progress = cfg.get("progress", "auto")
-    if not (isinstance(progress, bool) or progress == "auto"):
-        raise ConfigError(f"progress: must be auto, true or false, got {progress!r}")
-    if cfg.get("resume") and cfg.get("checkpoint") is False:
-        raise ConfigError("resume: needs checkpoint=true (a run without checkpoints cannot be resumed)")
-    data = cfg.get("data")
-    mib = data.get("max_file_mib") if data is not None else None
-    if mib is not None and (isinstance(mib, bool) or not isinstance(mib, (int, float)) or not mib > 0):
-        raise ConfigError(f"data.max_file_mib: must be a positive number of MiB, got {mib!r}")
-    bounds = cfg.get("bounds")
-    if bounds is not None:
-        if not OmegaConf.is_dict(bounds):
-            raise ConfigError(f"bounds: expected a mapping {{name: [low, high]}}, e.g. bounds={{Rs:[1,10]}}, "
-                              f"got {bounds!r}")
-        for k, v in bounds.items():
-            if not OmegaConf.is_list(v) or len(v) != 2:
-                raise ConfigError(f"bounds.{k}: expected [low, high], got {v!r}")
-    check = _problem_check(cfg)
-    if check is not None:
-        check(resolved(cfg))
-    check_plugin(cfg)
-
-
-#: The primary configuration of ``python -m benchmark``: its top-level keys are the only ones a
-#: run accepts (a misspelt ``+seeed=1`` would otherwise run silently with seed 0).
-PRIMARY_CONFIG = Path(__file__).resolve().parents[2] / "conf" / "config.yaml"
-
-
-def known_top_level_keys() -> list[str]:
-    """Top-level keys of conf/config.yaml and its config groups."""
-    doc = yaml.safe_load(PRIMARY_CONFIG.read_text(encoding="utf-8")) or {}
-    groups = []
-    for entry in doc.get("defaults", []):
-        if isinstance(entry, dict):
-            for k in entry:
-                k = str(k).split(" ")[-1].split("@")[0]
-                if not k.startswith("hydra") and k != "_self_":
-                    groups.append(k)
-    return sorted({*(k for k in doc if k not in ("defaults", "hydra")), *groups})
-
-
-def check_top_level_keys(cfg: DictConfig) -> None:
-    """A ConfigError naming a top-level key the project does not know, with the nearest one."""
-    known = known_top_level_keys()
-    for key in cfg:
-        if key not in known and key != "hydra":
-            close = difflib.get_close_matches(str(key), known, n=1, cutoff=0.6)
-            hint = f" (did you mean {close[0]}?)" if close else ""
-            raise ConfigError(f"{key}: unknown key{hint}; the keys of a run are {known}")
 
 
 def resolved(cfg: DictConfig) -> dict:
@@ -178,13 +86,13 @@ def check_data_kind(folder: Path, problem: str, expected: str) -> None:
     except (yaml.YAMLError, UnicodeDecodeError, ValueError, RecursionError):
         return  # the loader reports a malformed meta.yaml with file and line
     kind = doc.get("kind") if isinstance(doc, dict) else None
-    if isinstance(kind, str) and kind != expected and kind in DATA_KIND_PROBLEM:
+    if isinstance(kind, str) and kind != expected and DATA_KIND_PROBLEM.get(kind, problem) != problem:
         raise ConfigError(f"data.path: {folder} holds kind: {kind}, which problem={problem} does not read; "
                           f"use problem={DATA_KIND_PROBLEM[kind]}")
 
 
 #: Which problem reads a data folder of each ``kind`` (meta.yaml).
-DATA_KIND_PROBLEM = {"startup": "timedomain", "admittance": "admittance"}
+DATA_KIND_PROBLEM = {"startup": "timedomain", "admittance": "admittance", "loadtest": "admittance"}
 
 
 def build_problem(cfg: DictConfig) -> Problem:
@@ -204,46 +112,6 @@ def run_diagnosis(cfg: DictConfig, outdir: Path, progress=None) -> dict:
                              seed=int(cfg.seed), name=str(cfg.optimizer.name),
                              polish_budget=int(cfg.polish_budget))
     return instantiate(cfg.problem.diagnose)(resolved(cfg), dataset, outdir, base, progress)
-
-
-def _problem_check(cfg):
-    """The problem's ``check_config(run)``, if the module of its set-up function has one."""
-    target = str(cfg.problem.setup._target_)
-    module_name = target.rpartition(".")[0]
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise ConfigError(f"problem.setup._target_: cannot import {module_name!r}: {exc}") from None
-    return getattr(module, "check_config", None)
-
-
-def check_plugin(cfg: DictConfig):
-    """Import the plugin function and check its options against its signature; returns it."""
-    pcfg = cfg.optimizer.plugin
-    target = str(pcfg._target_)
-    module_name, _, attr = target.rpartition(".")
-    try:
-        fn = getattr(importlib.import_module(module_name), attr)
-    except ImportError as exc:
-        raise ConfigError(f"optimizer.plugin._target_: cannot import {module_name!r} for optimizer "
-                          f"{cfg.optimizer.get('name')!r}: {exc}") from None
-    except AttributeError:
-        raise ConfigError(f"optimizer.plugin._target_: {module_name!r} has no function {attr!r}") from None
-    try:
-        sig = inspect.signature(fn)
-    except (TypeError, ValueError):
-        return fn
-    params = sig.parameters
-    if any(p.kind == inspect.Parameter.VAR_KEYWORD for p in params.values()):
-        return fn
-    valid = [n for n, p in params.items() if n not in ("problem", "seed")
-             and p.kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)]
-    for key in pcfg:
-        if str(key).startswith("_"):
-            continue
-        if key not in valid:
-            raise ConfigError(f"optimizer.plugin.{key}: not an option of {target}; valid: {valid}")
-    return fn
 
 
 def package_versions() -> dict[str, str]:
@@ -268,8 +136,9 @@ def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[st
 
 
 @one_blas_thread
-def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
-    """One identification run, written to ``outdir``.
+def run(cfg: DictConfig, outdir: Path, overrides: list[str] | None = None) -> RunOutcome:
+    """One identification run, written to ``outdir``; ``overrides`` are what the user asked for
+    (the API's keyword arguments; None: the command line's), from which suggested commands are built.
 
     Checkpoints (``checkpoint``, default true): every evaluated batch is journaled to
     ``outdir/journal.bin`` as it happens. With ``resume=true`` and the same ``outdir``
@@ -346,16 +215,24 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         if budgeted.replay_mismatch:
             run_warnings.append(f"resume: {budgeted.replay_mismatch['message']}")
 
-    ident = polish_and_keep_better(problem, result, budgeted,
-                                   int(cfg.polish_budget) if cfg.get("polish") else None)
+    polish_budget = int(cfg.polish_budget) if cfg.get("polish") else None
+    ident = polish_and_keep_better(problem, result, budgeted, polish_budget)
+    # did the optimiser stop short; does the problem want the result from another set-up (core/review.py)
+    rev = review(problem, ident, seed=seed, polish_budget=int(cfg.polish_budget),
+                 identify=functools.partial(identify, plugin=plugin, budget=budget, name=name,
+                                            polish_budget=polish_budget, time_limit_s=cfg.get("time_limit_s")))
+    problem, ident, result = rev.problem, rev.ident, rev.ident.result
+    run_warnings += rev.warnings
     history, polish_info, x_best, f_best = ident.history, ident.polish, ident.x, ident.cost
     nuisance = refine_nuisance(problem, x_best, f_best)
     if nuisance is not None and nuisance.accepted:
         x_best, f_best = nuisance.x, nuisance.cost
+    rev.explain(x_best, int(cfg.polish_budget))
     wall = time.perf_counter() - t_start
 
-    data_path = (cfg.get("data") or {}).get("path")
-    assessment = assess(problem, x_best, status=ident.status, data_path=data_path, budget=budget)
+    asked = run_overrides(cfg) if overrides is None else overrides
+    assessment = assess(problem, x_best, status=ident.status, budget=budget, overrides=asked,
+                        shortfall=rev.shortfall)
     estimate = problem.estimate(x_best) if x_best is not None else None
     truth = problem.truth
     rel_error = score(estimate, truth) if estimate is not None else None
@@ -375,6 +252,7 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "searched": None if x_best is None else dict(zip(problem.parameter_names, map(float, x_best),
                                                          strict=True)),
         "estimate": estimate,
+        "units": None if estimate is None else {k: problem.units.get(k, "") for k in estimate},
         "truth": truth,
         "rel_error": rel_error,
         # uncertainty of the searched parameters at the final point (benchmark.core.quality)
@@ -400,6 +278,8 @@ def run(cfg: DictConfig, outdir: Path) -> RunOutcome:
         "bounds": {n: [float(lo), float(hi)] for n, lo, hi in zip(problem.parameter_names, problem.lower,
                                                                  problem.upper, strict=True)},
         "problem_info": problem.describe(),
+        "review": rev.record(),  # stopped short? a stop record set aside? a prior's weight? (core/review.py)
+        "notes": rev.notes,  # what the reader should know that is no warning (e.g. what a prior cost)
         # what the user must know before trusting the estimate (empty when all is well): the
         # data and set-up's own, then the verdict on the fit (benchmark.core.quality)
         "warnings": run_warnings + assessment["warnings"],
@@ -463,15 +343,15 @@ def _json_default(o):
 
 
 def format_table(record: dict) -> str:
-    """The short table printed after a run: parameter, estimate, truth, error."""
+    """The short table printed after a run: parameter, unit, estimate, truth, error, standard error."""
     est, truth, err = record["estimate"] or {}, record["truth"] or {}, record["rel_error"] or {}
-    se = record.get("standard_error") or {}
-    lines = [f"{'parameter':<10}{'estimate':>14}{'truth':>14}{'error':>10}{'std err':>12}"]
+    se, units = record.get("standard_error") or {}, record.get("units") or {}
+    lines = [f"{'parameter':<10}{'unit':<11}{'estimate':>12}{'truth':>14}{'error':>10}{'std err':>12}"]
     for k, v in est.items():
         t = f"{truth[k]:14.6g}" if k in truth else f"{'-':>14}"
         e = f"{100 * err[k]:+9.3f}%" if k in err else f"{'-':>10}"
         s = f"{se[k]:12.3g}" if se.get(k) is not None else f"{'-':>12}"
-        lines.append(f"{k:<10}{v:14.6g}{t}{e}{s}")
+        lines.append(f"{k:<10}{units.get(k) or '-':<11}{v:12.6g}{t}{e}{s}")
     cost = record["cost"]
     lines.append(
         f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}, "
@@ -485,6 +365,7 @@ def format_table(record: dict) -> str:
         lines.append("fit quality (RMS misfit / noise): " + ", ".join(
             f"{k} {v['ratio']:.3g}{'' if v['at_noise_level'] else ' (!)' if v['ratio'] > v['threshold'] else ''}"
             for k, v in fq.items()))
+    lines += [f"note: {n}" for n in record.get("notes") or []]
     warns = record.get("warnings") or []
     lines.append(f"warnings: {len(warns)}" if warns else "warnings: none")
     lines += [f"  - {w}" for w in warns]

@@ -234,21 +234,21 @@ def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str
               f"budget {r.get('budget')}, {r.get('wall_time_s', 0):.2f} s."
               + (f" {r['message']}" if r.get("message") and r.get("status") != "budget_spent" else ""), ""]
     est, truth, err = r.get("estimate") or {}, r.get("truth") or {}, r.get("rel_error") or {}
-    se = r.get("standard_error") or {}
+    se, units = r.get("standard_error") or {}, r.get("units") or {}
 
     def _se(k):
         return f"{se[k]:.3g}" if se.get(k) is not None else "-"
 
     if est and truth:
-        lines += ["| parameter | estimate | truth | error | standard error |", "|---|---|---|---|---|"]
+        lines += ["| parameter | unit | estimate | truth | error | standard error |", "|---|---|---|---|---|---|"]
         for k, v in est.items():
             t = f"{truth[k]:.6g}" if k in truth else "-"
             e = f"{100 * err[k]:+.3f} %" if k in err else "-"
-            lines.append(f"| {k} | {v:.6g} | {t} | {e} | {_se(k)} |")
+            lines.append(f"| {k} | {units.get(k) or '-'} | {v:.6g} | {t} | {e} | {_se(k)} |")
         lines.append("")
     elif est:  # measured data: no truth to score against
-        lines += ["| parameter | estimate | standard error |", "|---|---|---|"] + \
-            [f"| {k} | {v:.6g} | {_se(k)} |" for k, v in est.items()] + [""]
+        lines += ["| parameter | unit | estimate | standard error |", "|---|---|---|---|"] + \
+            [f"| {k} | {units.get(k) or '-'} | {v:.6g} | {_se(k)} |" for k, v in est.items()] + [""]
     unc = r.get("uncertainty") or {}
     if se:
         lines += ["Standard errors (searched parameters): " + unc.get("method", "") + "; "

@@ -43,6 +43,8 @@ class Problem(ABC):
     #: True parameter values (all names in :meth:`estimate`), or None for measured data.
     #: Only the scoring step reads it; the cost never does.
     truth: dict[str, float] | None = None
+    #: Unit of each parameter of :meth:`estimate` (``{"Rs": "ohm", ...}``): tables and messages.
+    units: dict[str, str] = {}
 
     @property
     def n_var(self) -> int:

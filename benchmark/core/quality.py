@@ -17,7 +17,8 @@ and plain-English warnings, computed once at the final point of a run.
   periodic fit, a quiet pre-trigger or a smooth channel), judged by
   :func:`benchmark.core.uncertainty.misfit_ratio` (the band the diagnosis uses for its
   statuses).
-* **Warnings** (:func:`quality_warnings`): the model misses the data, a parameter at a bound,
+* **Warnings** (:func:`quality_warnings`): the optimiser stopped short or the model misses the
+  data (:func:`misses_data_warning`, each with a complete command to run next), a parameter at a bound,
   a parameter not identifiable (huge standard error, ``|corr|`` near 1), the budget spent
   without convergence, plus the problem's own (``problem.quality_warnings``: e.g. Rs against
   the DC resistance).
@@ -30,6 +31,7 @@ import warnings as _warnings
 
 import numpy as np
 
+from benchmark.core import commands
 from benchmark.core.nuisance import JointView, has_nuisance
 from benchmark.core.uncertainty import correlation, hac_covariance, misfit_ratio, standard_errors, uncertainty_warnings
 
@@ -151,22 +153,52 @@ def fit_quality(problem, x) -> dict:
     return out
 
 
-def misses_data_warning(quality: dict, data_path: str | None) -> str | None:
-    """The one warning when some channel's misfit is above its noise band."""
-    above = {k: v for k, v in quality.items() if v["ratio"] > v["threshold"]}
+def _above(quality: dict) -> dict:
+    return {k: v for k, v in (quality or {}).items() if isinstance(v, dict) and v["ratio"] > v["threshold"]}
+
+
+def _misfits(above: dict) -> str:
+    return ", ".join(f"{k} {v['ratio']:.3g}x the noise (band up to {v['threshold']:.3g})" for k, v in above.items())
+
+
+def misses_data_warning(quality: dict, overrides=None, shortfall: dict | None = None) -> str | None:
+    """The one warning on the fit itself: "the optimiser stopped short" (a polish from the result,
+    or the true parameters, lower the cost: :func:`benchmark.core.review.stopped_short`), or
+    "the model misses the data" (some channel above its noise band where the optimiser is not
+    at fault), or both; each with the complete command to run next (the run's ``overrides``,
+    :mod:`benchmark.core.commands`). None when the fit is at the noise level and the optimiser
+    did not stop short."""
+    overrides = list(overrides or [])
+    diagnose = commands.diagnose_command(overrides)
+    if shortfall is not None and shortfall.get("short"):
+        found = []
+        if shortfall.get("polished_cost") is not None and shortfall["polished_cost"] < shortfall["cost"]:
+            found.append(f"a least-squares polish from the result lowers the cost from {shortfall['cost']:.6g} to "
+                         f"{shortfall['polished_cost']:.6g}")
+        if shortfall.get("truth_cost") is not None and shortfall["truth_cost"] < shortfall["cost"]:
+            found.append(f"the cost at the true parameters is {shortfall['truth_cost']:.6g}")
+        finish = (f"run `{commands.rerun_command(overrides, polish=True)}` (the same run with a polish), or the "
+                  f"default optimiser: `{commands.rerun_command(overrides, optimizer=None, budget=None)}`")
+        still = _above(shortfall.get("quality_polished"))
+        if shortfall.get("quality_polished") and not still:  # (a problem without fit channels says nothing)
+            return (f"the optimiser stopped short: {' and '.join(found)}, and the polished fit is at the noise "
+                    f"level: the model does not miss the data, the search ended early; {finish}")
+        tail = (f"; even the polished fit misses the data: RMS misfit of {_misfits(still)}; then run `{diagnose}`"
+                if still else "")
+        return f"the optimiser stopped short: {' and '.join(found)}; {finish}{tail}"
+    above = _above(quality)
     if not above:
         return None
-    what = ", ".join(f"{k} {v['ratio']:.3g}x the noise (band up to {v['threshold']:.3g})" for k, v in above.items())
-    cmd = f"python -m benchmark.diagnose data.path={data_path}" if data_path else \
-        "python -m benchmark.diagnose data.path=..."
-    return f"the model misses the data (run {cmd}): RMS misfit of {what}"
+    why = (" (a polish from the result does not lower the cost: the optimiser is not at fault)"
+           if shortfall is not None and shortfall.get("polished_cost") is not None else "")
+    return f"the model misses the data{why}: RMS misfit of {_misfits(above)}; run `{diagnose}` to see why"
 
 
-def quality_warnings(problem, x, *, se, corr, quality: dict, status: str, data_path: str | None,
-                     budget: int | None = None) -> list[str]:
+def quality_warnings(problem, x, *, se, corr, quality: dict, status: str, overrides=None,
+                     budget: int | None = None, shortfall: dict | None = None) -> list[str]:
     """All warnings of a result (see the module docstring); empty when all is well."""
     out = []
-    w = misses_data_warning(quality, data_path)
+    w = misses_data_warning(quality, overrides, shortfall)
     if w:
         out.append(w)
     if se is not None:
@@ -175,17 +207,25 @@ def quality_warnings(problem, x, *, se, corr, quality: dict, status: str, data_p
                                     bounds_key="bounds")
     if status == "budget_spent":
         b = f" of {budget} evaluations" if budget else ""
-        out.append(f"the budget{b} was spent without convergence: the estimate may not be a minimum "
-                   "(raise budget=, add polish=true, or use the default optimizer)")
+        if shortfall is not None and not shortfall.get("short") and shortfall.get("polished_cost") is not None:
+            out.append(f"the budget{b} was spent without convergence, but a least-squares polish from the result "
+                       "lowers the cost by less than 1 %: the estimate is near a minimum")
+        elif not (shortfall or {}).get("short"):  # (the stopped-short warning already says what to run)
+            out.append(f"the budget{b} was spent without convergence: the estimate may not be a minimum (run "
+                       f"`{commands.rerun_command(overrides, polish=True)}`)")
     own = getattr(problem, "quality_warnings", None)
     if own is not None:
         out += list(own(x))
     return out
 
 
-def assess(problem, x, *, status: str, data_path: str | None = None, budget: int | None = None) -> dict:
+def assess(problem, x, *, status: str, data_path: str | None = None, budget: int | None = None, overrides=None,
+           shortfall: dict | None = None) -> dict:
     """Everything above for a result record: ``standard_error``, ``correlation``,
-    ``uncertainty`` (method and notes), ``fit_quality`` and ``warnings`` (a list).
+    ``uncertainty`` (method and notes), ``fit_quality`` and ``warnings`` (a list). ``overrides``
+    (the run's command-line overrides; default: ``data.path=data_path`` when given) make the
+    commands the warnings suggest; ``shortfall`` is the result's
+    :func:`benchmark.core.review.stopped_short` check.
 
     Never raises: what cannot be computed is None, with the reason in ``uncertainty``."""
     out = {"standard_error": None, "correlation": None, "uncertainty": None, "fit_quality": {}, "warnings": []}
@@ -209,6 +249,8 @@ def assess(problem, x, *, status: str, data_path: str | None = None, budget: int
     except Exception as exc:
         out["fit_quality"] = {"error": f"{type(exc).__name__}: {exc}"}
     fq = {k: v for k, v in out["fit_quality"].items() if isinstance(v, dict)}
+    if overrides is None:
+        overrides = [] if data_path is None else [f"data.path={data_path}"]
     out["warnings"] = quality_warnings(problem, x, se=se, corr=corr, quality=fq, status=status,
-                                       data_path=data_path, budget=budget)
+                                       overrides=overrides, budget=budget, shortfall=shortfall)
     return out

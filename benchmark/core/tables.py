@@ -1,4 +1,4 @@
-"""Reading and writing the data-set folders of the README's Data sets, with validation.
+"""Reading and writing the data-set folders of docs/data_format.md, with validation.
 
 Every problem found in a file is raised as :class:`benchmark.core.errors.DataError` naming the
 file, the column and the row (1-based data row, the header being row 0, so row ``n`` is line
@@ -143,7 +143,7 @@ def read_meta(folder: Path, required: dict[str, type | tuple[type, ...]]) -> dic
         raise DataError(folder, "data set folder does not exist" if not folder.exists()
                         else "is not a folder: data.path names a data set folder (meta.yaml + CSV tables)")
     if not path.exists():
-        raise DataError(path, "missing: every data set folder needs a meta.yaml (the README's Data sets)")
+        raise DataError(path, "missing: every data set folder needs a meta.yaml (docs/data_format.md)")
     meta = read_yaml(path)
     if not isinstance(meta, dict):
         raise DataError(path, f"must be a mapping of keys to values, got {type(meta).__name__}")
@@ -241,6 +241,26 @@ def read_table(
         out[c] = _to_float(path, c, df[c], decimal_comma=decimal_comma, text=text, sep=sep,
                            n_fields=len(names))
     return pd.DataFrame(out), chosen
+
+
+def read_all_columns(path: Path, *, max_bytes: int | None = None) -> pd.DataFrame:
+    """Every column of a CSV table (or every variable of a ``.mat`` file) as finite float64, in
+    the file's order: :func:`read_table` with the file's own header as the column set (the same
+    separators, decimal commas and errors naming file, column and row)."""
+    path = Path(path)
+    if path.suffix.lower() == ".mat":
+        import scipy.io
+
+        try:
+            names = [name for name, _, _ in scipy.io.whosmat(str(path))]
+        except Exception as exc:
+            raise DataError(path, f"not a readable MATLAB .mat file: {_one_line(exc)}") from None
+    else:
+        text = read_text(path, max_bytes=max_bytes, what="table")
+        header = re.split(r"\r\n|\r|\n", text, maxsplit=1)[0]
+        names = [c.strip() for c in next(csv.reader([header], delimiter=_separator(header)), [])]
+    df, _ = read_table(path, [tuple(names)], max_bytes=max_bytes)
+    return df
 
 
 def _separator(header: str) -> str:

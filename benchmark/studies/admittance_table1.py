@@ -30,10 +30,11 @@ from hydra.utils import instantiate
 from scipy.optimize import least_squares
 
 from benchmark.core.budget import BudgetedProblem, run_plugin
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.harness import build_problem
 from benchmark.problems.admittance.circuit import input_admittance
 
-CONF = str(Path(__file__).resolve().parents[2] / "conf")
+CONF = str(CONFIG_DIR)
 ORDER8 = ("R1_total", "R2", "R2sigma", "R0", "X1", "X2", "X3", "X0")  # the paper's Table II order
 ORDER6 = ("R1_total", "R2", "R0", "X1", "X2", "X0")
 LABEL = {"R1_total": "R1+R1sigma"}

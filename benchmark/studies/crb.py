@@ -54,11 +54,12 @@ import yaml
 from hydra import compose, initialize_config_dir
 from scipy import stats
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.harness import build_problem, run
 from benchmark.core.io import write_text_atomic
 from benchmark.problems.timedomain.mechanical import fit_free_stop
 
-CONF = str(Path(__file__).resolve().parents[2] / "conf")
+CONF = str(CONFIG_DIR)
 NAMES7 = ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")
 NAMES5 = ("Rs", "Ls", "Le", "Rr", "J")
 SUBDIR = "${hydra:runtime.choices.optimizer}_polish${polish}_noise${noise.seed}"

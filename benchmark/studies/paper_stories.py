@@ -17,11 +17,12 @@ from pathlib import Path
 import numpy as np
 from hydra import compose, initialize_config_dir
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.io import write_text_atomic
 from benchmark.core.plotting import new_figure
 from benchmark.problems.timedomain.mechanical import fit_free_stop
 
-CONF = str(Path(__file__).resolve().parents[2] / "conf")
+CONF = str(CONFIG_DIR)
 
 
 def _compose(name, overrides):

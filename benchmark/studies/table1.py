@@ -17,10 +17,11 @@ from pathlib import Path
 import numpy as np
 from hydra import compose, initialize_config_dir
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.harness import run
 from benchmark.core.io import write_text_atomic
 
-CONF = str(Path(__file__).resolve().parents[2] / "conf")
+CONF = str(CONFIG_DIR)
 PAPER_ERROR = {"Rs": -0.41, "Ls": 0.52, "Le": -1.28, "Rr": -0.31, "J": 0.62, "fv": 0.61, "fc": -0.42}
 PAPER_TOLERANCE = 0.013  # every parameter within 1.3 %, the paper's largest error
 NAMES = ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")

@@ -23,8 +23,14 @@ What it models (SI units, stator-fixed alpha-beta frame, amplitude-invariant Cla
 * supplies: a grid direct-on-line start (harmonics, unbalance, source impedance, staggered
   and bouncing contactor poles, pre-trigger), a six-step inverter and open-loop V/f PWM, with
   device drops and dead time (:mod:`supply`, :mod:`inverter`); a free stop;
-* sensors and noise (:mod:`sensors`), the effect catalogue (:mod:`effects`), motor presets
-  (:mod:`motors`), data sets and blind draws (:mod:`dataset`, :mod:`blind`).
+* sensors and noise (:mod:`sensors`, :mod:`probes`), the effect catalogue (:mod:`effects`,
+  :mod:`sensor_effects`, :mod:`effect_base`), motor presets (:mod:`motors`), data sets and
+  blind draws (:mod:`dataset`, :mod:`blind`).
+
+Every effect has *development* forms (those the project's diagnosis was developed on) and
+*held-out* forms (second physical forms, for scoring only), split in one place,
+:mod:`forms`; a draw takes the development forms unless told ``forms="heldout"`` or
+``"all"`` (``docs/effect_forms.md`` lists every form with its equations and ranges).
 
 How it differs from the identification model: flux states instead of stator current and
 rotor flux, its own RK4 with a step several times shorter than the sample time, the input as
@@ -44,9 +50,10 @@ or ``python -m synthetic.independent --motor paper_1kw --scenario dol --effects 
 from synthetic.independent.blind import draw_blind_set
 from synthetic.independent.dataset import Dataset, make_dataset, make_spec, write_dataset
 from synthetic.independent.effects import EFFECTS, get_effect
+from synthetic.independent.forms import DEVELOPMENT, FORM_SETS, HELDOUT, forms_of
 from synthetic.independent.machine import TMachine
 from synthetic.independent.motors import PRESETS, Motor, get_motor
 from synthetic.independent.plant import Plant
 
-__all__ = ["EFFECTS", "PRESETS", "Dataset", "Motor", "Plant", "TMachine", "draw_blind_set", "get_effect", "get_motor",
-           "make_dataset", "make_spec", "write_dataset"]
+__all__ = ["DEVELOPMENT", "EFFECTS", "FORM_SETS", "HELDOUT", "PRESETS", "Dataset", "Motor", "Plant", "TMachine",
+           "draw_blind_set", "forms_of", "get_effect", "get_motor", "make_dataset", "make_spec", "write_dataset"]

@@ -2,10 +2,13 @@
 
     python -m synthetic.independent --motor paper_1kw --scenario dol \\
         --effects double_cage,main_saturation --seed 3 --out DIR [--duration 1.0] \\
-        [--sample-rate 10000] [--stop [SECONDS]] [--forms double_cage=deep_bar,...] \\
+        [--sample-rate 10000] [--stop [SECONDS]] [--forms heldout,double_cage=deep_bar,...] \\
         [--ideal-supply] [--no-speed] [--torque] [--blind]
 
 ``--blind`` draws everything (motor spread, scenario, effects, noise) from the seed instead.
+``--forms`` takes a form set (``development``, the default, ``heldout`` or ``all``: which forms
+the effects' forms are drawn from, :mod:`synthetic.independent.forms`) and ``name=form`` pairs
+that fix single forms, comma-separated.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 from synthetic.independent.blind import draw_blind_set
 from synthetic.independent.dataset import make_dataset, make_spec, write_dataset
 from synthetic.independent.effects import EFFECTS
+from synthetic.independent.forms import FORM_SETS
 from synthetic.independent.motors import PRESETS
 
 
@@ -28,7 +32,8 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--motor", default="paper_1kw", choices=sorted(PRESETS))
     ap.add_argument("--scenario", default="six_step", choices=["dol", "six_step", "pwm"])
     ap.add_argument("--effects", default="", help=f"comma-separated, from: {', '.join(EFFECTS)}")
-    ap.add_argument("--forms", default="", help="comma-separated name=form pairs")
+    ap.add_argument("--forms", default="", help=f"a form set ({', '.join(FORM_SETS)}; default development) and/or "
+                    "name=form pairs, comma-separated")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", required=True, help="output folder")
     ap.add_argument("--duration", type=float, default=1.0, help="start-up record after switch-on, s")
@@ -54,15 +59,20 @@ def main(argv=None) -> int:
     if unknown:
         print(f"unknown effect(s) {unknown}; known: {list(EFFECTS)}", file=sys.stderr)
         return 2
-    forms = dict(pair.split("=", 1) for pair in args.forms.split(",") if "=" in pair)
+    items = [x.strip() for x in args.forms.split(",") if x.strip()]
+    forms = dict(x.split("=", 1) for x in items if "=" in x)
+    sets = [x for x in items if "=" not in x] or ["development"]
+    if len(sets) > 1 or sets[0] not in FORM_SETS:
+        print(f"--forms: one form set of {FORM_SETS} and name=form pairs, got {args.forms!r}", file=sys.stderr)
+        return 2
     try:
         if args.blind:
-            spec = draw_blind_set(np.random.default_rng(args.seed), effects=names or None)
+            spec = draw_blind_set(np.random.default_rng(args.seed), effects=names or None, forms=sets[0])
         else:
             spec = make_spec(args.motor, args.scenario, names, seed=args.seed, duration=args.duration,
                              sample_rate=args.sample_rate, stop=args.stop, forms=forms,
                              ideal_supply=args.ideal_supply, oversampling=args.oversampling,
-                             has_speed=not args.no_speed, has_torque=args.torque)
+                             has_speed=not args.no_speed, has_torque=args.torque, form_set=sets[0])
             if args.fifth_harmonic is not None and spec["scenario"]["kind"] == "dol":
                 spec["scenario"]["h5"] = float(args.fifth_harmonic)
             if args.dc_resistance:

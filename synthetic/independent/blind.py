@@ -10,7 +10,9 @@ What is drawn (all from the caller's generator, in a fixed order):
 * scenario: ``dol`` (grid imperfections drawn), ``six_step`` or ``pwm`` (ramp drawn), record
   0.8-1.5 s (the motor's default sample rate), a free stop of 2-10 s with probability 0.5;
 * effects: the given names, or ``n_effects`` names drawn from the catalogue (``inverter_drop``
-  only for inverter scenarios); sizes and forms from each effect's draw;
+  only for inverter scenarios); sizes and forms from each effect's draw, the forms from the
+  form set ``forms`` (``development`` by default, ``heldout`` or ``all``:
+  :mod:`~synthetic.independent.forms`);
 * noise: white current noise 0.2-1 % of rated current amplitude, AR(1) coloured 0-0.6 %
   (pole 0.9-0.995), a 12-16-bit current ADC over 6-10 x rated (probability 0.5), grid
   voltage noise 0.1-1 V and a 12-16-bit voltage ADC over 1.5 x the rated phase amplitude
@@ -59,7 +61,7 @@ def _noise(rng: np.random.Generator, In: float, V: float) -> dict:
 
 
 def draw_blind_set(rng: np.random.Generator, effects=None, n_effects=(0, 3), motor: str | None = None,
-                   scenario: str | None = None) -> dict:
+                   scenario: str | None = None, forms: str = "development") -> dict:
     """A random data-set spec (see module docstring).
 
     Parameters
@@ -68,6 +70,7 @@ def draw_blind_set(rng: np.random.Generator, effects=None, n_effects=(0, 3), mot
     effects : effect names to inject (None = draw ``n_effects`` of them).
     n_effects : a count, or an inclusive ``(low, high)`` range of counts.
     motor, scenario : fix the preset or the scenario kind instead of drawing them.
+    forms : the form set the effects' forms are drawn from.
     """
     name = motor or str(rng.choice(sorted(PRESETS)))
     mo = get_motor(name)
@@ -91,7 +94,7 @@ def draw_blind_set(rng: np.random.Generator, effects=None, n_effects=(0, 3), mot
         "motor": name, "machine": machine,
         "scenario": draw_scenario(kind, spread, duration, mo.sample_rate, rng),
         "sample_rate": float(mo.sample_rate), "oversampling": 10,
-        "effects": [get_effect(e).draw(rng, spread) for e in effects],
+        "effects": [get_effect(e).draw(rng, spread, forms=forms, scenario=kind) for e in effects],
         "noise": _noise(rng, spread.rated_current_peak, spread.phase_peak),
         "sensors": {"has_speed": bool(rng.random() >= 0.1), "has_torque": bool(rng.random() < 0.2)},
         "stop": stop,

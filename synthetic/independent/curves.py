@@ -16,9 +16,22 @@ Magnetising curve ``psi_m = F(|i_m|)`` (``MagnetisingCurve``), forms:
 ``table``
     A maker's tabulated curve (B-H-like), piecewise linear through normalised points
     ``(i/i_k, psi/(Lm0 i_k))`` of :data:`TABLE_SHAPE`, continued with the slope ``Linf``.
+``langevin`` (held-out form)
+    ``F = Linf i + (Lm0 - Linf) 3 i_k L(i/i_k)`` with the Langevin function
+    ``L(x) = coth x - 1/x``: the anhysteretic magnetisation of Jiles and Atherton (J. Magn.
+    Magn. Mater. 61, 1986), ``M = M_s L(H/a)``, as the iron's share of the flux.
+``steel_gap`` (held-out form)
+    The magnetic circuit of the machine: an air gap in series with an iron path of a
+    measured electrical steel (:data:`M400_50A`). At flux density ``B`` the magnetising
+    current is ``i = c (B + x mu0 H(B))`` (gap plus iron ampere-turns, ``x`` the iron path
+    over the gap length) and the flux ``psi = a B`` (the classical construction of the
+    no-load curve, e.g. Pyrhonen, Jokinen, Hrabovcova, Design of Rotating Electrical
+    Machines, ch. 3). Tabulated at 48 flux densities (a monotone cubic through the steel's
+    points), continued with the air slope beyond the last point.
 
 Every form has the slope ``Lm0`` at zero current, so ``Lm0`` is the unsaturated magnetising
-inductance a small-signal test would measure.
+inductance a small-signal test would measure (``steel_gap``: its largest secant inductance,
+the slope at zero for a steel without a Rayleigh region such as M400-50A).
 
 Leakage characteristic ``|lambda| = g(|i|) = (L_lin + L_sat phi(|i|)) |i|`` (``LeakageCurve``):
 a linear part (slot body, end windings) plus a saturable part (tooth tips, slot bridges):
@@ -30,6 +43,11 @@ a linear part (slot body, end windings) plus a saturable part (tooth tips, slot 
     ``L_lin / (L_lin + L_sat) > 1/9`` (:meth:`LeakageCurve.monotone`).
 ``frohlich``
     ``phi = 1 / (1 + i/i_k)``: the saturable path's flux tends to ``L_sat i_k``.
+``bridge`` (held-out form)
+    ``phi = tanh(i/i_k) / (i/i_k)``: the iron bridge of a closed rotor slot, whose flux is
+    limited by the bridge's cross-section (``L_sat i_k`` = saturation flux density times the
+    bridge area); it saturates sharply at a low current, its incremental inductance
+    ``L_lin + L_sat sech^2(i/i_k)`` stays positive.
 
 The numba functions take a small float array so that the integrator can hold them.
 """
@@ -42,8 +60,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-MAG_FORMS = ("linear", "frohlich", "arctan", "table")
-LEAK_FORMS = ("none", "lorentzian", "frohlich")
+MAG_FORMS = ("linear", "frohlich", "arctan", "table", "langevin", "steel_gap")
+LEAK_FORMS = ("none", "lorentzian", "frohlich", "bridge")
+MU0 = 4e-7 * math.pi
 
 #: Normalised magnetising table (x = i/i_k, y = psi/(Lm0 i_k)): slope 1 up to 0.5, then
 #: falling slopes, like the no-load curve of a small cage motor (concave, so Newton on it
@@ -51,6 +70,31 @@ LEAK_FORMS = ("none", "lorentzian", "frohlich")
 TABLE_SHAPE = np.array([[0.0, 0.0], [0.5, 0.5], [0.8, 0.78], [1.0, 0.93], [1.3, 1.08], [1.7, 1.2],
                         [2.3, 1.31], [3.2, 1.41], [5.0, 1.53], [8.0, 1.65]])
 PRM_LEN = 2 * len(TABLE_SHAPE) + 4
+
+#: Magnetisation curve of the non-oriented electrical steel M400-50A (0.5 mm laminations):
+#: ``B`` (T) against ``H`` (A/m), as tabulated in the pyleecan material library (Eomys,
+#: Apache-2.0, ``Data/Material/M400-50A.json``), every second point up to 1.5 T.
+M400_50A = np.array([[0.0, 0.0], [0.5, 100.0], [0.7, 150.0], [0.8, 180.0], [0.9, 200.0], [1.0, 250.0],
+                     [1.1, 350.0], [1.2, 550.0], [1.3, 950.0], [1.4, 1550.0], [1.5, 2450.0], [1.6, 4100.0],
+                     [1.7, 6700.0], [1.8, 10750.0], [1.9, 19500.0], [2.0, 33000.0], [2.1, 57000.0],
+                     [2.2, 96000.0], [2.3, 170000.0]])
+STEEL_POINTS = 48
+
+
+def steel_field(bh: np.ndarray, B) -> np.ndarray:
+    """Field strength ``H`` (A/m) of the steel ``bh`` (rows ``B`` T, ``H`` A/m) at flux
+    density ``B`` (T): a monotone cubic (PCHIP) through its points."""
+    from scipy.interpolate import PchipInterpolator
+
+    return PchipInterpolator(bh[:, 0], bh[:, 1])(B)
+
+
+def steel_table(bh: np.ndarray, iron_ratio: float, points: int = STEEL_POINTS) -> np.ndarray:
+    """Normalised no-load curve of a gap in series with an iron path of the steel ``bh``,
+    ``iron_ratio`` = iron path over gap length: rows ``(B + x mu0 H(B), B)`` (T) at
+    ``points`` flux densities up to the steel's last point."""
+    B = np.linspace(0.0, bh[-1, 0], points)
+    return np.column_stack([B + iron_ratio * MU0 * steel_field(bh, B), B])
 
 
 @dataclass(frozen=True)
@@ -61,14 +105,17 @@ class MagnetisingCurve:
     ----------
     form : one of :data:`MAG_FORMS`.
     Lm0 : unsaturated (small-signal) magnetising inductance, H.
-    knee : knee current, A peak (``i_sat`` of frohlich, ``i_k`` of arctan and table).
+    knee : knee current, A peak (``i_sat`` of frohlich, ``i_k`` of arctan, table and
+        langevin; ``steel_gap``: the current at the reference flux).
     Linf : slope in deep saturation, H (the air-path inductance), ``0 < Linf < Lm0``.
+    table : ``steel_gap`` only: its points ``((i, ...), (psi, ...))``, A and Wb peak.
     """
 
     form: str = "linear"
     Lm0: float = 0.1
     knee: float = 1.0
     Linf: float = 0.0
+    table: tuple = ()
 
     def __post_init__(self):
         if self.form not in MAG_FORMS:
@@ -81,6 +128,9 @@ class MagnetisingCurve:
 
     def params(self) -> np.ndarray:
         """Float array read by :func:`mag_flux`: ``[code, Lm0, knee, Linf, x..., y...]``."""
+        if self.form == "steel_gap":
+            xs, ys = (np.asarray(v, float) for v in self.table)
+            return np.concatenate([[MAG_FORMS.index("table"), self.Lm0, self.knee, self.Linf], xs, ys])
         prm = np.zeros(PRM_LEN)
         prm[0] = MAG_FORMS.index(self.form)
         prm[1], prm[2], prm[3] = self.Lm0, self.knee, self.Linf
@@ -108,6 +158,8 @@ class MagnetisingCurve:
 
         if form == "linear":
             return cls("linear", Lm0)
+        if form == "steel_gap":
+            return cls.steel_gap(Lm0, psi_ref, drop)
         if not 0 < drop < 1 - linf_ratio:
             raise ValueError(f"drop must be in (0, {1 - linf_ratio}), got {drop}")
         i_ref = psi_ref / ((1 - drop) * Lm0)
@@ -117,6 +169,36 @@ class MagnetisingCurve:
 
         log_knee = brentq(miss, math.log(i_ref) - 12, math.log(i_ref) + 12, xtol=1e-13)
         return cls(form, Lm0, math.exp(log_knee), linf_ratio * Lm0)
+
+    @classmethod
+    def steel_gap(cls, Lm0: float, psi_ref: float, drop: float, iron_ratio: float, bh: np.ndarray = M400_50A):
+        """The gap-plus-iron curve (form ``steel_gap``) with the iron path ``iron_ratio`` times
+        the gap length, whose secant inductance at the flux ``psi_ref`` (Wb peak) is
+        ``(1 - drop) Lm0``, ``Lm0`` its largest secant inductance (where the steel's
+        permeability ``B/H`` peaks). The flux density at ``psi_ref`` is solved for.
+
+        With ``p(B) = mu0 H(B)/B`` the secant is ``~ 1/(1 + x p(B))``, so ``psi_ref`` sits where
+        ``p(B) = ((1 + x min p)/(1 - drop) - 1)/x``, on the rising branch of ``p``. A steel
+        whose permeability rises from low fields (a Rayleigh region, as M800-50A's) gives a
+        curve whose slope at zero is below ``Lm0``; for M400-50A it is ``Lm0``."""
+        from scipy.optimize import brentq
+
+        x = float(iron_ratio)
+        B = steel_table(bh, 0.0)[1:, 1]
+        p = MU0 * steel_field(bh, B) / B
+        k = int(np.argmin(p))
+        target = ((1 + x * p[k]) / (1 - drop) - 1) / x
+        if not (0 < drop < 1 and p[k] < target < p[-1]):
+            raise ValueError(f"steel_gap: a drop of {drop} with an iron path {x} x the gap is beyond the steel's "
+                             f"table (up to {bh[-1, 0]} T)")
+        b_ref = brentq(lambda b: MU0 * float(steel_field(bh, b)) / b - target, B[k], B[-1], xtol=1e-12)
+        pts = steel_table(bh, x)
+        a = psi_ref / b_ref  # Wb per T
+        c = a / (Lm0 * (1 + x * p[k]))  # A per T
+        i, psi = c * pts[:, 0], a * pts[:, 1]
+        Linf = a / (c * (1 + x))
+        knee = float(np.interp(psi_ref, psi, i))
+        return cls("steel_gap", Lm0, knee, Linf, (tuple(map(float, i)), tuple(map(float, psi))))
 
 
 @dataclass(frozen=True)
@@ -146,7 +228,7 @@ class LeakageCurve:
         """True when this path plus a linear ``series`` inductance (H) has a rising flux for
         all currents (positive incremental inductance); the lorentzian form needs
         ``(L_lin + series) > (L_lin + series + L_sat)/9``."""
-        if self.form != "lorentzian" or self.L_sat == 0:
+        if self.form != "lorentzian" or self.L_sat == 0:  # frohlich, bridge: dg/dr > L_lin always
             return self.L_lin + series > 0 or self.L_sat > 0
         return self.L_lin + series > (self.L_lin + series + self.L_sat) / 9
 
@@ -192,6 +274,19 @@ class LeakageCurve:
 
 
 @njit(cache=True)
+def _langevin(x):
+    """Langevin function ``coth x - 1/x`` and its derivative ``1/x^2 - 1/sinh^2 x``, ``x >= 0``
+    (series below 0.05, asymptotes above 30)."""
+    if x < 0.05:
+        x2 = x * x
+        return x * (1.0 / 3.0 - x2 / 45.0 + 2.0 * x2 * x2 / 945.0), 1.0 / 3.0 - x2 / 15.0 + 2.0 * x2 * x2 / 189.0
+    if x > 30.0:
+        return 1.0 - 1.0 / x, 1.0 / (x * x)
+    s = math.sinh(x)
+    return math.cosh(x) / s - 1.0 / x, 1.0 / (x * x) - 1.0 / (s * s)
+
+
+@njit(cache=True)
 def mag_flux(prm, r):
     """Magnetising flux magnitude ``F(r)`` and slope ``dF/dr`` at current magnitude ``r >= 0``."""
     code = int(prm[0])
@@ -204,6 +299,9 @@ def mag_flux(prm, r):
     if code == 2:
         x = r / knee
         return Linf * r + (Lm0 - Linf) * knee * math.atan(x), Linf + (Lm0 - Linf) / (1.0 + x * x)
+    if code == 4:
+        L, dL = _langevin(r / knee)
+        return Linf * r + (Lm0 - Linf) * 3.0 * knee * L, Linf + (Lm0 - Linf) * 3.0 * dL
     n = (prm.shape[0] - 4) // 2
     xs = prm[4:4 + n]
     ys = prm[4 + n:4 + 2 * n]
@@ -227,6 +325,9 @@ def leak_flux(prm, r):
     if code == 1:
         q = 1.0 + x * x
         return (lin + sat / q) * r, lin + sat * (1.0 - x * x) / (q * q)
+    if code == 3:
+        th = math.tanh(x)
+        return lin * r + sat * knee * th, lin + sat * (1.0 - th * th)
     q = 1.0 + x
     return (lin + sat / q) * r, lin + sat / (q * q)
 

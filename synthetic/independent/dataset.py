@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from synthetic.independent.effects import Build, get_effect, ordered
+from synthetic.independent.effects import Build, core_of, get_effect, ordered
 from synthetic.independent.integrate import COL, coast, oversampling, simulate
 from synthetic.independent.machine import TMachine
 from synthetic.independent.mechanics import Mechanics
@@ -91,9 +91,11 @@ def draw_scenario(kind: str, motor: Motor, duration: float, sample_rate: float,
 def make_spec(motor: str, scenario: str = "six_step", effects=(), seed: int = 0, duration: float = 1.0,
               sample_rate: float | None = None, stop: float | None = None, forms: dict | None = None,
               ideal_supply: bool = False, noise: dict | None = None, oversampling: int = 10,
-              has_speed: bool = True, has_torque: bool = False) -> dict:
+              has_speed: bool = True, has_torque: bool = False, form_set: str = "development") -> dict:
     """A spec with the named effects at random realistic sizes and forms (``forms`` fixes
-    some forms), noise ``noise`` (default :func:`default_noise`), stop record of ``stop`` s."""
+    some forms, the others are drawn from the form set ``form_set``: ``development``,
+    ``heldout`` or ``all``, see :mod:`~synthetic.independent.forms`), noise ``noise`` (default
+    :func:`default_noise`), stop record of ``stop`` s."""
     mo = get_motor(motor)
     fs = float(sample_rate or mo.sample_rate)
     rng = np.random.default_rng([seed, 1])
@@ -101,7 +103,7 @@ def make_spec(motor: str, scenario: str = "six_step", effects=(), seed: int = 0,
     return {
         "motor": motor, "scenario": draw_scenario(scenario, mo, duration, fs, None if ideal_supply else rng),
         "sample_rate": fs, "oversampling": int(oversampling),
-        "effects": [get_effect(n).draw(rng, mo, forms.get(n)) for n in effects],
+        "effects": [get_effect(n).draw(rng, mo, forms.get(n), form_set, scenario) for n in effects],
         "noise": default_noise(mo) if noise is None else dict(noise),
         "sensors": {"has_speed": bool(has_speed), "has_torque": bool(has_torque)},
         "stop": None if not stop else {"duration": float(stop), "sample_time": 1e-3},
@@ -149,8 +151,12 @@ def make_dataset(spec: dict) -> Dataset:
     if req is not None:  # size the heat capacities from this test's own copper energies
         cold = simulate(replace(plant, thermal=Thermal()), drive)
         E_s, E_r = (float(np.sum(cold.col(c)[:-1]) * h) for c in ("P_s", "P_r"))
+        core = core_of(req)
+        if core is not None:  # three bodies: the winding's heat leaves into the core meanwhile
+            P_s = cold.col("P_s")[:-1]
+            E_s = float(np.sum(P_s * np.exp(-(len(P_s) - 1 - np.arange(len(P_s))) * h / core[0])) * h)
         sized = Thermal.sized(req["form"] == "two_body", E_s, E_r, req["size"], req["rotor_factor"],
-                              req["time_constant"], motor.machine.theta_ref)
+                              req["time_constant"], motor.machine.theta_ref, core=core)
         plant = replace(plant, thermal=sized)
         pk = plant.pack()
     traj = simulate(plant, drive, packed=pk)
@@ -159,12 +165,12 @@ def make_dataset(spec: dict) -> Dataset:
         v_step = terminal_voltage(out, drive, plant.source_L, h)
     else:
         v_step = drive.v_ideal
-    d_cur = int(round(build.skew["current"] * M))
-    d_vol = int(round(build.skew["voltage"] * M))
+    timing = _channel_timing(build.skew, M, Ts)
+    achieved = timing.pop("achieved")
     for eff in realised:
         if eff["name"] == "channel_delay":
-            eff["achieved_size"] = (d_cur or d_vol) / M
-    sensors = Sensors(**build.sensors, current_delay=d_cur, voltage_delay=d_vol)
+            eff["achieved_size"] = achieved
+    sensors = Sensors(**build.sensors, **timing)
     noise = Noise(**(spec.get("noise") or {}))
     rng = np.random.default_rng(int(spec["seed"]))
     rec = startup_record(out, COL, v_step, scenario.kind != "dol", K, M, h, sensors, noise, rng,
@@ -215,6 +221,22 @@ def terminal_voltage(out: np.ndarray, drive, source_L: float, h: float) -> np.nd
         elif j + 1 < n:
             v[j] = v[j + 1]
     return v
+
+
+def _channel_timing(skew: dict, M: int, Ts: float) -> dict:
+    """The sensors' timing settings of the effects' channel skews (samples): common lags in
+    internal steps, or a multiplexed card's per-phase lags (its slot realised to a multiple
+    of ``1/M``), or a Bessel filter's group delay (s); ``achieved`` the realised size."""
+    out = {"current_delay": int(round(skew["current"] * M)), "voltage_delay": int(round(skew["voltage"] * M))}
+    out["achieved"] = (out["current_delay"] or out["voltage_delay"]) / M
+    if skew.get("filter"):
+        out.update(current_filter_delay=skew["filter"] * Ts, achieved=skew["filter"])
+    if skew.get("mux"):
+        slot = max(1, int(round(skew["mux"]["slot"] * M)))
+        lag = {c: k * slot for k, c in enumerate(skew["mux"]["order"])}
+        out.update(current_delays=(lag["i_r"], lag["i_s"]), voltage_delays=(lag["v_r"], lag["v_s"], lag["v_t"]),
+                   achieved=slot / M)
+    return out
 
 
 def _plant_and_drive(build: Build, Ts: float, K: int, oversample: int):
@@ -268,7 +290,7 @@ def _free_stop(plant, pk, scenario, traj, t_start, Ts, M, stop_spec, last_gates,
     if len(rows) < n_out:
         rest = coast(plant, x, t_start + len(rows) * dt, (n_out - len(rows)) * dt, dt)
         rows = np.vstack([rows, rest[:n_out - len(rows)]])
-    speed = sensed_speed(rows[:, 0], rows[:, 1], sensors, noise, rng)
+    speed = sensed_speed(rows[:, 0], rows[:, 1], sensors, noise, rng, dt)
     return {"t": np.arange(n_out) * dt, "speed": speed}
 
 

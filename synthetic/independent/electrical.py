@@ -18,7 +18,18 @@ Voltage equations (``w_e = p w_mech``, ``J x = (-x_b, x_a)``):
 
     d psi_s/dt    = v_s - Rs i_s
     d psi_r[k]/dt = -R_k i_r[k] + w_e J psi_r[k]
-    d psi_fe/dt   = -R_fe i_fe
+    d psi_fe/dt   = -R_fe i_fe              (eddy currents)
+    d psi_fe/dt   = -R_fe dz(i_fe, i_h)     (held-out ``steinmetz``: eddy currents and hysteresis)
+
+``dz(i, i_h) = max(0, |i| - i_h) i/|i|`` is a vector dead zone: while the iron-loss current is
+below the coercive current ``i_h`` the winding's flux is held (the domain walls are pinned),
+beyond it the excess drives the eddy resistance. With the air-gap EMF ``e`` the current is
+``i_h + |e|/R_fe`` along ``e``: the loss ``3/2 (i_h |e| + |e|^2/R_fe)`` is a hysteresis term
+proportional to frequency plus an eddy term proportional to its square (Steinmetz 1892;
+Bertotti, IEEE Trans. Magn. 24(1), 1988, without the excess term); ``i_h ~ |psi_m|^(alpha-1)``
+(``psi_m`` the main flux) gives the Steinmetz exponent ``alpha`` of the hysteresis loss per
+cycle. A flux left in the
+winding when the supply is removed is the iron's remanence.
 
 Torque on the rotor ``T = 3/2 p (psi_m x I_r)`` with the sign convention
 ``x x y = x_b y_a - x_a y_b`` written out below; without an iron-loss winding it equals
@@ -173,10 +184,11 @@ def torque(p, cw):
 
 
 @njit(cache=True)
-def flux_derivatives(x, n, we, va, vb, Rs, Rr, kr, Rfe, open_stator, cw, dx):
+def flux_derivatives(x, n, we, va, vb, Rs, Rr, kr, Rfe, ih, open_stator, cw, dx):
     """Write ``d psi/dt`` of all windings into ``dx`` (stator derivative 0 when open).
     ``Rs`` is the stator resistance now (ohm), ``Rr`` the loop resistances at the reference
-    temperature and ``kr`` their temperature factor."""
+    temperature and ``kr`` their temperature factor; ``ih`` the iron's coercive current (A,
+    0 = eddy currents only)."""
     if open_stator:
         dx[0] = 0.0
         dx[1] = 0.0
@@ -187,8 +199,14 @@ def flux_derivatives(x, n, we, va, vb, Rs, Rr, kr, Rfe, open_stator, cw, dx):
         a = 2 + 2 * k
         dx[a] = -Rr[k] * kr * cw[W_LOOPS + 2 * k] - we * x[a + 1]
         dx[a + 1] = -Rr[k] * kr * cw[W_LOOPS + 2 * k + 1] + we * x[a]
-    dx[2 + 2 * n] = -Rfe * cw[W_IFE]
-    dx[3 + 2 * n] = -Rfe * cw[W_IFE + 1]
+    if ih > 0.0:
+        m = math.hypot(cw[W_IFE], cw[W_IFE + 1])
+        g = Rfe * (m - ih) / m if m > ih else 0.0
+        dx[2 + 2 * n] = -g * cw[W_IFE]
+        dx[3 + 2 * n] = -g * cw[W_IFE + 1]
+    else:
+        dx[2 + 2 * n] = -Rfe * cw[W_IFE]
+        dx[3 + 2 * n] = -Rfe * cw[W_IFE + 1]
 
 
 @njit(cache=True)

@@ -31,8 +31,8 @@ from numba import njit
 
 from synthetic.independent.electrical import W_IR, W_LOOPS, W_PSIM, flux_derivatives, rotor_loss, solve_currents, torque
 from synthetic.independent.inverter import applied_voltage, clarke, phase_currents
-from synthetic.independent.mechanics import mech_derivatives, run_free, stick
-from synthetic.independent.plant import E_C, E_INVLFE, E_P, E_RFE, E_RS, Plant
+from synthetic.independent.mechanics import N_MECH, mech_derivatives, run_free, stick
+from synthetic.independent.plant import E_ALPHA, E_C, E_IH, E_INVLFE, E_P, E_PSIREF, E_RFE, E_RS, Plant
 from synthetic.independent.supply import (
     G_IARC,
     G_RG,
@@ -57,7 +57,8 @@ def _rhs(t, x, dx, mode, va, vb, closed, arc, gp, n, el, stat, rot, mag, Rr, Lin
     open_st = mode == MODE_OPEN
     it = solve_currents(x, n, open_st, stat, rot, mag, Linv, wv, el[E_C], el[E_INVLFE], im, cw)
     b = 4 + 2 * n
-    ks, kr = resistance_factors(x[b + 4], x[b + 5], therm)
+    bt = b + N_MECH
+    ks, kr = resistance_factors(x[bt], x[bt + 1], therm)
     Rs = el[E_RS] * ks
     isa = cw[0]
     isb = cw[1]
@@ -74,13 +75,16 @@ def _rhs(t, x, dx, mode, va, vb, closed, arc, gp, n, el, stat, rot, mag, Rr, Lin
     v = W_LOOPS + 2 * n
     cw[v] = va
     cw[v + 1] = vb
-    flux_derivatives(x, n, el[E_P] * x[b], va, vb, Rs, Rr, kr, el[E_RFE], open_st, cw, dx)
+    ih = 0.0
+    if el[E_IH] > 0.0:  # Steinmetz iron loss: the coercive current at this main flux
+        ih = el[E_IH] * (math.hypot(cw[W_PSIM], cw[W_PSIM + 1]) / el[E_PSIREF]) ** (el[E_ALPHA] - 1.0)
+    flux_derivatives(x, n, el[E_P] * x[b], va, vb, Rs, Rr, kr, el[E_RFE], ih, open_st, cw, dx)
     te = torque(el[E_P], cw)
     cw[v + 2] = te
     cw[v + 3] = mech_derivatives(t, x, b, te, mech, dx)
     cw[v + 4] = 1.5 * Rs * (isa * isa + isb * isb)
     cw[v + 5] = rotor_loss(n, Rr, kr, cw)
-    thermal_derivatives(x, b + 4, cw[v + 4], cw[v + 5], therm, dx)
+    thermal_derivatives(x, bt, cw[v + 4], cw[v + 5], therm, dx)
     return it
 
 
@@ -102,6 +106,7 @@ def run_steps(x, t0, h, mode, sub, u, nr, nf, closed, arc, gp, ip, n, el, stat, 
     cs = np.array([0.0, 0.5, 0.5, 1.0])
     ws = np.array([1.0, 2.0, 2.0, 1.0]) / 6.0
     b = 4 + 2 * n
+    bt = b + N_MECH
     v = W_LOOPS + 2 * n
     bad = 0
     for j in range(N + 1):
@@ -144,8 +149,8 @@ def run_steps(x, t0, h, mode, sub, u, nr, nf, closed, arc, gp, ip, n, el, stat, 
                     out[j, 6] = cw[v + 3]
                     out[j, 7] = cw[v + 2]
                     out[j, 8] = x[b + 3]
-                    out[j, 9] = x[b + 4]
-                    out[j, 10] = x[b + 5]
+                    out[j, 9] = x[bt]
+                    out[j, 10] = x[bt + 1]
                     out[j, 11] = x[0]
                     out[j, 12] = x[1]
                     out[j, 13] = math.hypot(cw[W_IR], cw[W_IR + 1])
@@ -213,8 +218,8 @@ def oversampling(plant: Plant, Ts: float, requested: int) -> int:
 def coast(plant: Plant, x: np.ndarray, t0: float, duration: float, dt_out: float) -> np.ndarray:
     """Mechanics only (no electromagnetic torque) for ``duration`` s from state ``x``;
     returns rows ``(w_l, theta)`` every ``dt_out`` s, the first at ``t0``. The RK4 step is
-    ``dt_out`` or less: 1/40 of the coupling's resonance period and 1/20 of the shortest
-    mechanical time constant."""
+    ``dt_out`` or less: 1/40 of the coupling's resonance period, 1/20 of the shortest
+    mechanical time constant and 1/10 of a DC generator's armature time constant."""
     m = plant.machine
     mech = plant.mechanics.pack(m.J, m.fv, m.fc)
     h = dt_out
@@ -224,11 +229,13 @@ def coast(plant: Plant, x: np.ndarray, t0: float, duration: float, dt_out: float
         if plant.mechanics.damping > 0:
             Jr = 1 / (1 / m.J + 1 / plant.mechanics.J_load)
             h = min(h, 0.05 * Jr / plant.mechanics.damping)
+    if plant.mechanics.armature_time_constant() > 0:
+        h = min(h, 0.1 * plant.mechanics.armature_time_constant())
     every = max(1, math.ceil(dt_out / h))
     h = dt_out / every
     steps = int(round(duration / dt_out)) * every
     b = plant.mech_offset()
-    x4 = np.array(x[b:b + 4], float)
+    x4 = np.array(x[b:b + N_MECH], float)
     out = np.zeros((steps // every + 1, 2))
     run_free(x4, float(t0), h, steps, every, mech, out)
     return out

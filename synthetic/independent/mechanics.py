@@ -2,19 +2,36 @@
 
 States (mechanical rad/s and rad): ``w_m`` motor speed, ``w_l`` load speed (the speed the
 sensor sees), ``twist`` coupling angle ``theta_m - theta_l``, ``theta`` angle of the sensed
-shaft (for ripple at the rotation frequency).
+shaft (for ripple at the rotation frequency), and ``i_a`` the armature current of a DC
+generator load (A; zero for the other loads).
 
 Friction on the motor shaft: viscous ``fv w_m`` and Coulomb ``fc sign(w_m)``. Stiction: a
 shaft at standstill stays put while the torque driving it is within its Coulomb torque
 (the resisting torque is the driving torque clipped to ``+-fc``); after each integration
 step a speed that crossed zero is set to zero, so that it sticks or breaks away again.
+Held-out form ``bearing``: the friction of rolling bearings and seals, a load-dependent
+torque ``fc`` plus Palmgren's hydrodynamic term ``c_p |w|^(2/3)`` (Palmgren, Ball and Roller
+Bearing Engineering, 1959; the SKF catalogue's ``M_0 ~ (nu n)^(2/3)``), with a Stribeck
+breakaway at standstill: the level ``fc + (fs - fc) exp(-(w/w_s)^2) + c_p |w|^(2/3)``
+(Stribeck's curve as in Armstrong-Helouvry, Dupont, Canudas de Wit, Automatica 30(7),
+1994); standstill holds up to ``fs``.
 
 Load torque (on the load side, or on the single mass): ``constant`` (passive: it opposes
-motion and acts like Coulomb friction), ``quadratic`` ``T_L (w/w_ref)^2`` (fan, pump) or
-``step`` (a passive constant torque applied from ``t_step`` on).
+motion and acts like Coulomb friction), ``quadratic`` ``T_L (w/w_ref)^2`` (fan, pump),
+``step`` (a passive constant torque applied from ``t_step`` on) or, held out,
+``dc_generator``: a separately excited DC machine whose armature is closed on a resistor at
+``t_step``; torque ``k_e i_a`` with ``L_a di_a/dt = k_e w - R_a i_a - U_b tanh(i_a/i_b)``
+(EMF, circuit resistance, brush drop; e.g. Fitzgerald, Kingsley, Umans, Electric Machinery,
+ch. 7). At standstill (no EMF) it gives no torque; after the switch its torque rises with
+the armature time constant ``L_a/R_a`` towards ``k_e^2 w/R_a``.
 
 Two-mass coupling torque ``T_sh = k dz(twist) + c (w_m - w_l)`` with ``dz`` a dead zone of
 half-width ``backlash`` (rad; 0 = linear spring); no damping torque in the free play.
+Held-out form ``elastomer`` (``twist_ref`` > 0): a progressive elastomer coupling (jaw
+coupling with a polyurethane spider, whose dynamic stiffness rises with the transmitted
+torque), ``T_sh = k (z + z^3/(3 z_r^2)) + c sqrt(1 + (z/z_r)^2) (w_m - w_l)``: the
+incremental stiffness ``k (1 + (z/z_r)^2)`` hardens with the twist and the damping follows
+its square root (a constant damping ratio, i.e. the material's loss factor).
 """
 
 from __future__ import annotations
@@ -25,8 +42,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-LOADS = ("none", "constant", "quadratic", "step")
-M_JM, M_JL, M_FV, M_FC, M_K, M_C, M_BL, M_TWO, M_LOAD, M_TL, M_WREF, M_TSTEP = range(12)
+LOADS = ("none", "constant", "quadratic", "step", "dc_generator")
+(M_JM, M_JL, M_FV, M_FC, M_K, M_C, M_BL, M_TWO, M_LOAD, M_TL, M_WREF, M_TSTEP, M_FS, M_WS, M_KE, M_RA, M_LA, M_UB,
+ M_IB, M_ZR, M_PG) = range(21)
+N_MECH = 5  # states: w_m, w_l, twist, theta, i_a
 
 
 @dataclass(frozen=True)
@@ -42,7 +61,12 @@ class Mechanics:
     load : one of :data:`LOADS`.
     load_torque : ``T_L``, N m.
     w_ref : speed at which the quadratic load reaches ``T_L``, mechanical rad/s.
-    t_step : instant of a step load, s.
+    t_step : instant of a step load (or of a DC generator's armature switch), s.
+    breakaway : Stribeck breakaway torque ``fs``, N m (0: plain Coulomb friction).
+    stribeck_speed : Stribeck speed ``w_s``, mechanical rad/s.
+    palmgren : Palmgren coefficient ``c_p``, N m (rad/s)^(-2/3).
+    generator : DC generator ``(k_e V s/rad, R_a ohm, L_a H, U_b V, i_b A)`` (load ``dc_generator``).
+    twist_ref : elastomer hardening twist ``z_r``, rad (0: linear spring).
     """
 
     J_load: float = 0.0
@@ -53,6 +77,11 @@ class Mechanics:
     load_torque: float = 0.0
     w_ref: float = 1.0
     t_step: float = 0.0
+    breakaway: float = 0.0
+    stribeck_speed: float = 1.0
+    palmgren: float = 0.0
+    generator: tuple = (0.0, 1.0, 1.0, 0.0, 1.0)
+    twist_ref: float = 0.0
 
     def __post_init__(self):
         if self.load not in LOADS:
@@ -71,12 +100,56 @@ class Mechanics:
         return math.sqrt(self.stiffness * (1 / J_motor + 1 / self.J_load)) / (2 * math.pi)
 
     def pack(self, J: float, fv: float, fc: float) -> np.ndarray:
-        out = np.zeros(12)
+        out = np.zeros(21)
         out[M_JM], out[M_JL], out[M_FV], out[M_FC] = J, self.J_load, fv, fc
         out[M_K], out[M_C], out[M_BL], out[M_TWO] = self.stiffness, self.damping, self.backlash, float(self.two_mass)
         out[M_LOAD], out[M_TL] = LOADS.index(self.load), self.load_torque
         out[M_WREF], out[M_TSTEP] = self.w_ref, self.t_step
+        out[M_FS], out[M_WS], out[M_PG] = self.breakaway, self.stribeck_speed, self.palmgren
+        out[M_KE:M_IB + 1] = self.generator
+        out[M_ZR] = self.twist_ref
         return out
+
+    def armature_time_constant(self) -> float:
+        """``L_a/R_a`` of a DC generator load, s (0 for the other loads)."""
+        return self.generator[2] / self.generator[1] if self.load == "dc_generator" else 0.0
+
+
+@njit(cache=True)
+def _coulomb(w, mech):
+    """Coulomb torque level of the motor shaft at speed ``w`` (the ``bearing`` law when
+    ``breakaway`` is set), N m."""
+    if mech[M_FS] == 0.0:
+        return mech[M_FC]
+    q = w / mech[M_WS]
+    return mech[M_FC] + (mech[M_FS] - mech[M_FC]) * math.exp(-q * q) + mech[M_PG] * abs(w) ** (2.0 / 3.0)
+
+
+@njit(cache=True)
+def _generator(t, w, ia, mech, dx, k):
+    """Torque of a DC generator load (N m) at load speed ``w`` and armature current ``ia``;
+    writes ``d i_a/dt`` into ``dx[k]`` (zero before the armature switch, or another load)."""
+    if int(mech[M_LOAD]) != 4 or t < mech[M_TSTEP]:
+        dx[k] = 0.0
+        return 0.0
+    ke = mech[M_KE]
+    dx[k] = (ke * w - mech[M_RA] * ia - mech[M_UB] * math.tanh(ia / mech[M_IB])) / mech[M_LA]
+    return ke * ia
+
+
+@njit(cache=True)
+def _spring(tw, dw, mech):
+    """Coupling torque at twist ``tw`` (rad) and speed difference ``dw`` (rad/s), N m."""
+    bl = mech[M_BL]
+    zr = mech[M_ZR]
+    if zr > 0.0:
+        q = tw / zr
+        return mech[M_K] * tw * (1.0 + q * q / 3.0) + mech[M_C] * math.sqrt(1.0 + q * q) * dw
+    if tw > bl:
+        return mech[M_K] * (tw - bl) + mech[M_C] * dw
+    if tw < -bl:
+        return mech[M_K] * (tw + bl) + mech[M_C] * dw
+    return 0.0
 
 
 @njit(cache=True)
@@ -109,13 +182,14 @@ def _loads(t, w, mech):
 
 @njit(cache=True)
 def mech_derivatives(t, x, b, Te, mech, dx):
-    """Write the derivatives of ``x[b:b+4]`` (w_m, w_l, twist, theta) into ``dx``; return the
-    shaft torque transmitted to the load, N m."""
+    """Write the derivatives of ``x[b:b+5]`` (w_m, w_l, twist, theta, i_a) into ``dx``;
+    return the shaft torque transmitted to the load, N m."""
     wm = x[b]
     fv = mech[M_FV]
-    fc = mech[M_FC]
+    fc = _coulomb(wm, mech)
     if mech[M_TWO] == 0.0:
         tcl, tdyn = _loads(t, wm, mech)
+        tdyn += _generator(t, wm, x[b + 4], mech, dx, b + 4)
         drive = Te - tdyn
         res = _resist(wm, drive - fv * wm, fc + tcl)
         dw = (drive - fv * wm - res) / mech[M_JM]
@@ -126,17 +200,11 @@ def mech_derivatives(t, x, b, Te, mech, dx):
         share = tcl / (fc + tcl) if fc + tcl > 0.0 else 0.0
         return tdyn + share * res
     wl = x[b + 1]
-    tw = x[b + 2]
-    bl = mech[M_BL]
-    if tw > bl:
-        tsh = mech[M_K] * (tw - bl) + mech[M_C] * (wm - wl)
-    elif tw < -bl:
-        tsh = mech[M_K] * (tw + bl) + mech[M_C] * (wm - wl)
-    else:
-        tsh = 0.0
+    tsh = _spring(x[b + 2], wm - wl, mech)
     drive_m = Te - tsh - fv * wm
     dx[b] = (drive_m - _resist(wm, drive_m, fc)) / mech[M_JM]
     tcl, tdyn = _loads(t, wl, mech)
+    tdyn += _generator(t, wl, x[b + 4], mech, dx, b + 4)
     drive_l = tsh - tdyn
     dx[b + 1] = (drive_l - _resist(wl, drive_l, tcl)) / mech[M_JL]
     dx[b + 2] = wm - wl
@@ -162,14 +230,15 @@ def stick(x_old, x, b, t, mech):
 
 @njit(cache=True)
 def run_free(x4, t0, h, nsteps, every, mech, out):
-    """Coast with no electromagnetic torque: RK4 on ``x4`` = (w_m, w_l, twist, theta) with
-    step ``h``; ``out[k] = (w_l, theta)`` every ``every`` steps (``out[0]`` the start)."""
-    k1 = np.zeros(4)
-    k2 = np.zeros(4)
-    k3 = np.zeros(4)
-    k4 = np.zeros(4)
-    xs = np.zeros(4)
-    xo = np.zeros(4)
+    """Coast with no electromagnetic torque: RK4 on ``x4`` = (w_m, w_l, twist, theta, i_a)
+    with step ``h``; ``out[k] = (w_l, theta)`` every ``every`` steps (``out[0]`` the start)."""
+    ns = x4.shape[0]
+    k1 = np.zeros(ns)
+    k2 = np.zeros(ns)
+    k3 = np.zeros(ns)
+    k4 = np.zeros(ns)
+    xs = np.zeros(ns)
+    xo = np.zeros(ns)
     m = 0
     for j in range(nsteps + 1):
         if j % every == 0:
@@ -179,20 +248,20 @@ def run_free(x4, t0, h, nsteps, every, mech, out):
         if j == nsteps:
             break
         t = t0 + j * h
-        if x4[0] == 0.0 and x4[1] == 0.0 and x4[2] == 0.0 and mech[M_LOAD] != 3.0:
+        if x4[0] == 0.0 and x4[1] == 0.0 and x4[2] == 0.0 and x4[4] == 0.0 and mech[M_LOAD] != 3.0:
             continue  # at rest with nothing driving it: stays at rest
         xo[:] = x4
         mech_derivatives(t, x4, 0, 0.0, mech, k1)
-        for i in range(4):
+        for i in range(ns):
             xs[i] = x4[i] + 0.5 * h * k1[i]
         mech_derivatives(t + 0.5 * h, xs, 0, 0.0, mech, k2)
-        for i in range(4):
+        for i in range(ns):
             xs[i] = x4[i] + 0.5 * h * k2[i]
         mech_derivatives(t + 0.5 * h, xs, 0, 0.0, mech, k3)
-        for i in range(4):
+        for i in range(ns):
             xs[i] = x4[i] + h * k3[i]
         mech_derivatives(t + h, xs, 0, 0.0, mech, k4)
-        for i in range(4):
+        for i in range(ns):
             x4[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         stick(xo, x4, 0, t + h, mech)
     return m

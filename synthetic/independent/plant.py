@@ -5,7 +5,8 @@ A plain :class:`Plant` (only a :class:`~synthetic.independent.machine.TMachine`)
 single-cage T circuit: the effects of :mod:`~synthetic.independent.effects` replace its parts.
 
 State vector layout (``n`` rotor loops): ``psi_s`` (2), ``psi_r`` (2n), ``psi_fe`` (2), then
-``w_m, w_l, twist, theta`` (mechanics) and ``theta_s, theta_r`` (winding temperatures, C).
+``w_m, w_l, twist, theta, i_a`` (mechanics, with a DC generator load's armature current) and
+``theta_s, theta_r, theta_c`` (winding and stator core temperatures, C).
 """
 
 from __future__ import annotations
@@ -18,13 +19,14 @@ import numpy as np
 from synthetic.independent.curves import LeakageCurve, MagnetisingCurve
 from synthetic.independent.inverter import Inverter
 from synthetic.independent.machine import TMachine
-from synthetic.independent.mechanics import Mechanics
+from synthetic.independent.mechanics import N_MECH, Mechanics
 from synthetic.independent.rotor import RotorCage
 from synthetic.independent.thermal import Thermal
 
 #: RK4 is stable for real eigenvalues with ``h |lambda| < 2.78``; the step keeps this margin.
 STABLE_H_LAMBDA = 2.0
-E_P, E_RS, E_RG, E_INVLFE, E_RFE, E_C = range(6)
+E_P, E_RS, E_RG, E_INVLFE, E_RFE, E_C, E_IH, E_ALPHA, E_PSIREF = range(9)
+N_THERMAL = 3
 
 
 @dataclass(frozen=True)
@@ -38,15 +40,50 @@ class IronLoss:
     L : its leakage inductance, H; ``L/R`` is the eddy-current time constant. With
         ``w L/R << 1`` it acts as the resistance ``R (1 + (w L/R)^2)`` across the
         magnetising branch.
+    coercive : held-out ``steinmetz`` form: coercive current at the flux ``psi_ref``, A
+        (0 = eddy currents only; see :mod:`~synthetic.independent.electrical`).
+    alpha : Steinmetz exponent of the hysteresis loss per cycle.
+    psi_ref : flux at which ``coercive`` is given, Wb.
     """
 
     R: float
     L: float
+    coercive: float = 0.0
+    alpha: float = 2.0
+    psi_ref: float = 1.0
+
+    @classmethod
+    def steinmetz(cls, E: float, w: float, P: float, share: float, tau: float, alpha: float, psi_ref: float):
+        """The ``steinmetz`` winding (eddy time constant ``tau`` s) that dissipates ``P`` W
+        at the EMF amplitude ``E`` (V, flux ``psi_ref = E/w`` Wb) and angular frequency ``w``
+        (rad/s), and ``(share/2 + (1 - share)/4) P`` at ``w/2`` and the same flux: the
+        two-frequency separation of iron loss into a hysteresis share ``share`` (loss per
+        cycle independent of frequency) and eddy currents (per cycle proportional to it)."""
+        from scipy.optimize import fsolve
+
+        def miss(x):
+            R, ih = np.exp(x)
+            return [np.log(_steady_loss(R, tau * R, ih, E, w) / P),
+                    np.log(_steady_loss(R, tau * R, ih, E / 2, w / 2) / (P * (share / 2 + (1 - share) / 4)))]
+
+        start = np.log([1.5 * E**2 / ((1 - share) * P), share * P / (1.5 * E)])
+        R, ih = np.exp(fsolve(miss, start, xtol=1e-12))
+        return cls(float(R), float(tau * R), float(ih), float(alpha), float(psi_ref))
 
     def equivalent_resistance(self, f: float) -> float:
         """Parallel core-loss resistance giving the same loss at frequency ``f``, ohm."""
         x = 2 * math.pi * f * self.L
         return self.R * (1 + (x / self.R) ** 2)
+
+
+def _steady_loss(R: float, L: float, ih: float, E: float, w: float) -> float:
+    """Loss (W) of the dead-zone iron-loss winding (resistance ``R`` ohm, leakage ``L`` H,
+    coercive current ``ih`` A) under a rotating EMF of amplitude ``E`` V at ``w`` rad/s: its
+    current of magnitude ``m > ih`` solves ``(w L m)^2 + (R (m - ih))^2 = E^2`` and it
+    dissipates ``3/2 R (m - ih) m``."""
+    a, b, c = (w * L) ** 2 + R**2, -2 * R**2 * ih, (R * ih) ** 2 - E**2
+    m = (-b + np.sqrt(b * b - 4 * a * c)) / (2 * a)
+    return 1.5 * R * (m - ih) * m
 
 
 @dataclass(frozen=True)
@@ -79,7 +116,7 @@ class Plant:
 
     @property
     def n_states(self) -> int:
-        return 10 + 2 * self.n_loops
+        return 4 + 2 * self.n_loops + N_MECH + N_THERMAL
 
     def mech_offset(self) -> int:
         return 4 + 2 * self.n_loops
@@ -101,10 +138,12 @@ class Plant:
         wv = Linv @ np.ones(cage.n)
         stat = self.leak_curve().params()
         stat[1] += self.source_L
-        el = np.zeros(6)
+        el = np.zeros(9)
         el[E_P], el[E_RS], el[E_RG] = m.p, m.Rs, self.source_R
         el[E_INVLFE] = 1.0 / self.iron.L if self.iron is not None else 0.0
         el[E_RFE] = self.iron.R if self.iron is not None else 0.0
+        if self.iron is not None:
+            el[E_IH], el[E_ALPHA], el[E_PSIREF] = self.iron.coercive, self.iron.alpha, self.iron.psi_ref
         el[E_C] = float(wv.sum())
         return {"n": cage.n, "el": el, "stat": stat, "rot": cage.common.params(), "mag": self.mag_curve().params(),
                 "Rr": cage.R_array.copy(), "Linv": Linv, "wv": wv,
@@ -113,7 +152,7 @@ class Plant:
     def initial_state(self) -> np.ndarray:
         x = np.zeros(self.n_states)
         th = self.thermal.theta_start if self.thermal.theta_start is not None else self.machine.theta_ref
-        x[self.mech_offset() + 4:] = th
+        x[self.mech_offset() + N_MECH:] = th
         return x
 
     def inductance_matrix(self, saturated: bool) -> tuple[np.ndarray, np.ndarray]:

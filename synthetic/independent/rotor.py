@@ -27,8 +27,14 @@ from synthetic.independent.curves import LeakageCurve
 #: Shapes for :func:`design`: loop resistances (normalised to a parallel value of 1) and layer
 #: permeances (normalised). ``double_cage``: outer (top) cage of high resistance (brass or thin
 #: bars) linking little slot leakage, inner cage of low resistance behind a leakage slit.
-#: ``deep_bar``: equal slices of one rectangular bar.
-SHAPES = ("double_cage", "deep_bar")
+#: ``deep_bar``: equal slices of one rectangular bar. ``tapered_bar`` (held-out form): equal
+#: slices of a trapezoidal bar whose width goes linearly from ``b_top`` to ``taper * b_top``;
+#: a slice of width ``b`` has the resistance ``~ 1/b`` and its layer the slot-leakage
+#: permeance ``~ 1/b`` (the multilayer method of Babb and Williams, AIEE Trans. 70, 1951,
+#: for bars of any shape; see also Boldea and Nasar, The Induction Machine Handbook,
+#: the chapter on skin effect). ``taper < 1``: the rotor slot of parallel-sided teeth,
+#: narrowing towards the shaft; ``taper > 1``: a bottle-shaped bar, wide at the bottom.
+SHAPES = ("double_cage", "deep_bar", "tapered_bar")
 
 
 def ladder_matrix(layers) -> np.ndarray:
@@ -106,22 +112,23 @@ class RotorCage:
         return replace(self, R=tuple(float(r) * factor for r in self.R))
 
 
-def _shape(kind: str, n: int):
+def _shape(kind: str, n: int, taper: float = 1.0):
     if kind == "double_cage":
         r = np.array([6.0, 1.2])
         layers = np.array([0.1, 1.0])
-    elif kind == "deep_bar":
+    elif kind in ("deep_bar", "tapered_bar"):
         if n < 3:
             raise ValueError(f"a deep bar needs at least 3 slices, got {n}")
-        r = np.full(n, float(n))
-        layers = np.ones(n)
+        width = np.linspace(1.0, taper, n) if kind == "tapered_bar" else np.ones(n)
+        r = float(n) / width
+        layers = 1.0 / width
     else:
         raise ValueError(f"rotor shape must be one of {SHAPES}, got {kind!r}")
     return r, ladder_matrix(layers)
 
 
 def design(kind: str, Rr: float, Llr: float, w: float, ratio: float, n: int = 4,
-           max_growth: float = 2.5) -> tuple[RotorCage, float]:
+           max_growth: float = 2.5, taper: float = 1.0) -> tuple[RotorCage, float]:
     """A multi-loop rotor with the low-slip resistance ``Rr`` (ohm), the resistance ratio
     ``R(w)/R(0)`` at rotor angular frequency ``w`` (rad/s; the supply's, i.e. at standstill)
     and, when possible, the low-slip leakage ``Llr`` (H).
@@ -132,9 +139,9 @@ def design(kind: str, Rr: float, Llr: float, w: float, ratio: float, n: int = 4,
     ``w Llr/Rr`` is small), the ladder leakage grows, up to ``max_growth`` times ``Llr``: a
     rotor built for a high starting resistance has a higher running leakage too. The truth
     must then use the rotor's own low-slip values (:meth:`RotorCage.low_slip`). Returns the
-    rotor and the achieved ratio.
+    rotor and the achieved ratio. ``taper``: bottom over top width of a ``tapered_bar``.
     """
-    r_shape, L_shape = _shape(kind, n)
+    r_shape, L_shape = _shape(kind, n, taper)
     R = Rr * r_shape / (1.0 / np.sum(1.0 / r_shape))  # parallel value = Rr
 
     def rotor(s: float, common: float) -> RotorCage:

@@ -39,6 +39,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
+from synthetic.independent.inverter import N_INVERTER
+
 SCENARIOS = ("dol", "six_step", "pwm")
 SIX_STEP_STATES = np.array([(1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 1, 1), (0, 0, 1), (1, 0, 1)], float)
 MODE_INVERTER, MODE_GRID, MODE_OPEN = 0, 1, 2
@@ -73,8 +75,9 @@ class Drive:
 
 def _empty(n: int, h: float, mode: int, grid=None, inverter=None) -> Drive:
     z = np.zeros((n, 3))
+    inverter = np.zeros(N_INVERTER) if inverter is None else inverter
     return Drive(h, np.full(n, mode, np.int64), np.ones(n, np.int64), z.copy(), z.copy(), z.copy(), z.copy(),
-                 z.copy(), np.zeros(G_H) if grid is None else grid, np.zeros(6) if inverter is None else inverter)
+                 z.copy(), np.zeros(G_H) if grid is None else grid, inverter)
 
 
 def _clarke_rows(v3: np.ndarray) -> np.ndarray:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from omegaconf import OmegaConf
 
 from benchmark.analysis.blind import label_of, n_effects_of, predicted_label, summarise, wilson
@@ -242,3 +243,56 @@ def test_the_motulator_source_draws_motulator_s_own_2p2kw_machine_too():
         else:
             scale = d["noise"]["current_std"] / a["noise"]["current_std"]
             assert 1.2 < scale < 1.4  # 5.5 A per 1 kV against the preset's 4.3
+
+
+def test_forms_key_draws_heldout_forms_and_a_heldout_plant_set_runs_end_to_end(tmp_path, monkeypatch):
+    """``forms=heldout``: the plant and motulator draw only held-out forms, the own plant refuses,
+    and one tiny plant set goes through the whole loop (made, truth moved away, the data folder
+    read by the project's loader, scored). The diagnosis itself is replaced by a reader: the
+    held-out forms are for the final scoring, not for looking at verdicts now."""
+    from pathlib import Path
+
+    import yaml
+    from hydra import compose, initialize_config_dir
+
+    import benchmark.analysis.blind as blind
+    from benchmark.analysis.blind import BlindSettings, run_source
+    from benchmark.analysis.blind_sources import SOURCES
+    from benchmark.core.errors import ConfigError
+    from benchmark.problems.timedomain.data import load_startup_dataset
+    from synthetic.independent.forms import HELDOUT, MOTULATOR_HELDOUT
+
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+
+    def settings(*overrides):
+        with initialize_config_dir(version_base="1.3", config_dir=conf):
+            return BlindSettings.from_run(compose("blind", overrides=list(overrides)))
+
+    assert settings().forms == "development"
+    mot = settings("source=motulator", "n=12", "seed=5", "forms=heldout", "free_share=0")
+    for d in SOURCES["motulator"](mot)[0]:
+        assert all(o["form"] in MOTULATOR_HELDOUT[e] for e, o in d["options"].items())
+    with pytest.raises(ConfigError, match="own plant.*no held-out forms"):
+        SOURCES["own"](settings("source=own", "forms=heldout"))
+    with pytest.raises(ConfigError, match="forms: one of"):
+        settings("forms=secret")
+
+    seen = []
+
+    def read_only(s, folder, outdir):
+        assert not (Path(folder) / "truth.yaml").exists()
+        ds = load_startup_dataset(folder)
+        seen.append(len(ds.startups[0].t))
+        return {"status": "no_gap", "effects": [], "verdict": "none", "explained_share": 0.0, "wall_time_s": 0.0,
+                "gap_before": {"heldout_rms_over_noise": 1.0}, "gap_after": {"heldout_rms_over_noise": 1.0}}
+
+    monkeypatch.setattr(blind, "diagnose_folder", read_only)
+    s = settings("source=plant", "n=1", "seed=4", "forms=heldout", "free_share=0", "two_share=0",
+                 "plant_duration=0.1", "plant_stop=false", "only_effects=[current_sensor_saturation]",
+                 f"workdir={tmp_path / 'work'}", f"out={tmp_path / 'out'}")
+    summary = run_source(s, "python -m benchmark.blind source=plant forms=heldout")
+    truth = yaml.safe_load((tmp_path / "work" / "plant" / "truth" / "set_000.yaml").read_text())
+    (eff,) = truth["effects"]
+    assert eff["name"] == "current_sensor_saturation" and eff["form"] in HELDOUT[eff["name"]]
+    assert seen and seen[0] > 500 and summary["n"] == 1
+    assert (tmp_path / "out" / "plant" / "blind.json").exists()

@@ -223,7 +223,7 @@ def test_labels_split_problems_and_optimizer_settings(tmp_path):
 def test_cli_writes_tables_figures_and_ioh_export(runs_dir, tmp_path):
     out = tmp_path / "out"
     proc = subprocess.run(
-        [sys.executable, "-m", "benchmark.report", str(runs_dir), f"out={out}", "budgets=[10,50,100,200]"],
+        [sys.executable, "-m", "benchmark.report", str(runs_dir), f"out={out}", "budgets=[10,50,100,200,5000]"],
         cwd=REPO,
         capture_output=True,
         text=True,
@@ -241,6 +241,10 @@ def test_cli_writes_tables_figures_and_ioh_export(runs_dir, tmp_path):
     # beta at 100: b0 1.005 (stopped on its own), b1 1.008 -> 1.0065 over 2 of 3 runs
     assert "| beta | 2/3 | 65 | 80 | 6 | 3.502 (2/3) | 1.006 (2/3) | 1.005 (1/3) |" in md
     assert "- beta seed 2: RuntimeError: boom (`b2`)" in md
+    # toyA's converged run holds its cost at every budget; no toyB run reached 200: no empty columns
+    toy_a, toy_b = md.split("## toyB")[0], md.split("## toyB")[1]
+    assert "best cost at 5000" in toy_a and "best cost at 100 |" in toy_b
+    assert "best cost at 200" not in toy_b and "best cost at 5000" not in toy_b
     tex = (out / "summary.tex").read_text()
     assert r"\toprule" in tex and r"alpha & 3 & 0 & 1/3 & +2 \% [1.5 \%]" in tex
 

@@ -1,12 +1,15 @@
-"""Every fenced command of the README runs as written: ``python -m tests.cli.readme_commands``.
+"""Every fenced command of the README and of docs/ runs as written.
 
-The README's ```bash blocks are read in order and each command is run with bash in the
-repository (what it writes, outputs/, data/, bench/, runs/, is git-ignored), in the order a
-newcomer would type them, since later commands read what earlier ones wrote. It takes several
-minutes (identifications and diagnoses), so it is a script run before a release, not part of the
-test suite. Skipped, and said so here: commands whose comment says they take minutes (marked
-``(minutes)`` in the README),
-the two installs (CI runs exactly those, .ci/run), and SLURM (no cluster here).
+The ```bash blocks of each file are read in order and each command is run with bash in a fresh
+temporary folder per file, as a user who cloned the repository would type them there (the folder
+holds a copy of ``examples/`` and ``plugins/genesis_example/``, which the commands name; later
+commands read what earlier ones wrote). The README's ```python blocks run as scripts in that
+folder too. Skipped, and said so here: commands whose comment says they take minutes (marked
+``(minutes)``), the installs (CI runs exactly those: .ci/run), and SLURM (no cluster here). A
+command already run from an earlier file is not run again.
+
+``tests/cli/test_readme.py`` runs the quick ones in the test suite; ``python -m
+tests.cli.readme_commands`` runs them by hand and prints each.
 """
 
 from __future__ import annotations
@@ -15,46 +18,83 @@ import os
 import re
 import shutil
 import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 SKIP = ("(minutes)", "pip install", "imbench_slurm", "hydra/launcher=submitit")
+#: What a command may name that the repository holds (copied into the temporary folder).
+SHIPPED = ("examples", "plugins/genesis_example")
 
 
-def readme_commands() -> list[str]:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    commands = []
-    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
-        joined = re.sub(r"\\\n\s*", " ", block)
-        for line in joined.splitlines():
+def documents() -> list[Path]:
+    """The README, then every page of docs/."""
+    return [REPO / "README.md", *sorted((REPO / "docs").rglob("*.md"))]
+
+
+def commands(path: Path) -> list[str]:
+    """The fenced bash commands of one file, in order (a line continued with a backslash joined)."""
+    out = []
+    for block in re.findall(r"```bash\n(.*?)```", path.read_text(encoding="utf-8"), flags=re.S):
+        for line in re.sub(r"\\\n\s*", " ", block).splitlines():
             line = line.strip()
             if line and not line.startswith("#"):
-                commands.append(line)
-    return commands
+                out.append(line)
+    return out
 
 
-def run_all() -> list[str]:
-    """Run every quick README command in order; returns the failures (command, exit, stderr)."""
-    made = [d for d in ("data", "bench", "runs") if not (REPO / d).exists()]
-    env = dict(os.environ, PYTHONPATH=str(REPO))
+def python_blocks(path: Path) -> list[str]:
+    """The fenced Python snippets of a file that use the API (not the plugin/effect templates)."""
+    return [b for b in re.findall(r"```python\n(.*?)```", path.read_text(encoding="utf-8"), flags=re.S)
+            if b.lstrip().startswith("from benchmark import api")]
+
+
+def bare(cmd: str) -> str:
+    """The command without its trailing comment (the same command in two files runs once)."""
+    return re.sub(r"\s+#.*$", "", cmd)
+
+
+def quick(cmd: str) -> bool:
+    return not any(s in cmd for s in SKIP)
+
+
+def run_file(path: Path, seen: set[str], log=print) -> list[str]:
+    """Run the quick commands and API snippets of one file in a fresh temporary folder; returns
+    the failures (file, command, exit status, end of stderr)."""
+    env = dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND="Agg", NUMBA_NUM_THREADS="1")
     failures = []
-    try:
-        for cmd in readme_commands():
-            if any(s in cmd for s in SKIP):
-                print(f"skip  {cmd}", flush=True)
-                continue
-            proc = subprocess.run(["bash", "-c", cmd], cwd=REPO, env=env, capture_output=True, text=True,
-                                  timeout=1800)
-            print(f"{'ok   ' if proc.returncode == 0 else 'FAIL '} {cmd}", flush=True)
+    with tempfile.TemporaryDirectory(prefix="imbench-docs-") as tmp:
+        for item in SHIPPED:
+            shutil.copytree(REPO / item, Path(tmp) / item)
+        jobs = [(bare(c), ["bash", "-c", c]) for c in commands(path) if quick(c) and bare(c) not in seen]
+        for k, block in enumerate(python_blocks(path)):
+            script = Path(tmp) / f"snippet_{k}.py"
+            script.write_text(block, encoding="utf-8")
+            jobs.append((f"python snippet {k + 1}", [sys.executable, str(script)]))
+        for label, argv in jobs:
+            seen.add(label)
+            proc = subprocess.run(argv, cwd=tmp, env=env, capture_output=True, text=True, timeout=1800)
+            log(f"{'ok   ' if proc.returncode == 0 else 'FAIL '} {path.relative_to(REPO)}: {label}")
             if proc.returncode != 0:
-                failures.append(f"{cmd}\n  exit {proc.returncode}: {proc.stderr.strip()[-600:]}")
-    finally:
-        for d in made:
-            shutil.rmtree(REPO / d, ignore_errors=True)
+                failures.append(f"{path.relative_to(REPO)}: {label}\n  exit {proc.returncode}: "
+                                f"{proc.stderr.strip()[-800:]}")
     return failures
+
+
+def run_all(log=print) -> list[str]:
+    """Every file's quick commands, two files at a time (each command on one numba thread)."""
+    seen: set[str] = set()
+    files = documents()
+    # the README first: the docs repeat some of its commands, which then run once
+    first = run_file(files[0], seen, log)
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        rest = pool.map(lambda f: run_file(f, seen, log), files[1:])
+        return first + [f for failures in rest for f in failures]
 
 
 if __name__ == "__main__":
     bad = run_all()
-    print("\n".join(bad) if bad else "every quick README command ran")
+    print("\n".join(bad) if bad else "every quick fenced command ran")
     raise SystemExit(1 if bad else 0)

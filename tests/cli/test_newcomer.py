@@ -24,7 +24,7 @@ def test_help_says_what_the_project_does():
     out = _run("benchmark", "--help")
     assert out.returncode == 0
     assert "imbench: identify the parameters of an induction-motor model" in out.stdout
-    assert "optimizer: " in out.stdout and "python -m benchmark.diagnose" in out.stdout
+    assert "optimizer  cmaes" in out.stdout and "python -m benchmark.diagnose" in out.stdout
     rep = _run("benchmark.report", "--help")
     assert rep.returncode == 0 and rep.stdout.startswith("usage: python -m benchmark.report DIR")
 

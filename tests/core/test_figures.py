@@ -38,7 +38,8 @@ def test_a_tiny_run_gets_its_figures_and_report(tmp_path, problem):
     run(compose_config([f"problem={problem}", "optimizer=genesis", "budget=200", "checkpoint=false"]), tmp_path)
     rec, report = _check_figures(tmp_path, EXPECTED[problem])
     assert report.startswith(f"# {problem} / genesis, seed 0")
-    assert "| parameter | estimate | truth | error |" in report
+    assert "| parameter | unit | estimate | truth | error |" in report
+    assert ("| J | kg m^2 |" if problem == "timedomain" else "| X1 | ohm |") in report
     assert rec["figures"]["report"] == "report.md" and rec["figures"]["time_s"] > 0
 
 

@@ -50,11 +50,16 @@ def test_a_good_fit_carries_no_warning(good_run):
 
 
 def test_a_bad_fit_carries_the_warnings(bad_run):
+    """200 evaluations of DE on an exact model: the misfit is the optimiser's, and the warning says
+    so (a polish from its result, and the true parameters, cost far less), not "the model misses"."""
     w = bad_run["warnings"]
     assert bad_run["status"] == "budget_spent"
-    assert any(s.startswith("the model misses the data (run python -m benchmark.diagnose") for s in w), w
-    assert any("spent without convergence" in s for s in w), w
+    assert any(s.startswith("the optimiser stopped short: a least-squares polish from the result lowers the cost")
+               and "the polished fit is at the noise level" in s for s in w), w
+    assert not any(s.startswith("the model misses the data") for s in w), w
     assert any(not v["at_noise_level"] and v["ratio"] > 10 for v in bad_run["fit_quality"].values())
+    short = bad_run["review"]["stopped_short"]
+    assert short["short"] and short["polished_cost"] < 0.1 * short["cost"] and short["truth_cost"] < short["cost"]
 
 
 def test_standard_errors_and_correlation_are_sane(good_run):

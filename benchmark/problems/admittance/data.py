@@ -1,4 +1,4 @@
-"""The admittance data set (``kind: admittance``, the README's Data sets): read, validate, write.
+"""The admittance data set (``kind: admittance``, docs/data_format.md): read, validate, write.
 
 Folder layout
 -------------
@@ -38,7 +38,7 @@ from benchmark.core.io import write_table_atomic, write_yaml_atomic
 from benchmark.core.tables import read_meta, read_table
 from benchmark.problems.admittance.circuit import slip_from_speed, speed_from_slip
 
-__all__ = ["AdmittanceData", "load_admittance", "write_admittance", "read_truth"]
+__all__ = ["AdmittanceData", "load_admittance", "load_steady_state", "write_admittance", "read_truth"]
 
 THERMAL_KEYS = (
     "ambient_temperature",
@@ -84,6 +84,13 @@ class AdmittanceData:
     source: str = "memory"
     description: str = ""
     files: list[str] = field(default_factory=list)
+    frequency_ratio: np.ndarray | None = None
+    winding_temperature: np.ndarray | None = None
+    test: np.ndarray | None = None
+    sigma_G: np.ndarray | None = None
+    sigma_B: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
+    loadtest: object = None
 
     @property
     def Y(self) -> np.ndarray:
@@ -134,7 +141,8 @@ def load_admittance(folder) -> AdmittanceData:
     meta = read_meta(folder, {"kind": str, "frequency": float, "pole_pairs": int})
     mpath = folder / "meta.yaml"
     if meta["kind"] != "admittance":
-        raise DataError(mpath, f"key 'kind' is {meta['kind']!r}; this loader reads kind 'admittance'")
+        raise DataError(mpath, f"key 'kind' is {meta['kind']!r}; problem=admittance reads kind 'admittance' "
+                        "(a slip sweep) or 'loadtest' (the tables of a motor test report)")
     f = float(meta["frequency"])
     _positive(mpath, "frequency", f)
     p = int(meta["pole_pairs"])
@@ -185,7 +193,7 @@ def load_admittance(folder) -> AdmittanceData:
 
     files = sorted(folder.glob("sweep*.csv"))
     if not files:
-        raise DataError(folder, "no sweep*.csv table found (the README's Data sets, kind admittance)")
+        raise DataError(folder, "no sweep*.csv table found (docs/data_format.md, kind admittance)")
     parts = {k: [] for k in ("slip", "G", "B", "voltage", "time", "torque", "sweep")}
     has = {"time": None, "torque": None}
     for k, path in enumerate(files):
@@ -263,6 +271,19 @@ def load_admittance(folder) -> AdmittanceData:
         description=str(meta.get("description", "")),
         files=[p_.name for p_ in files],
     )
+
+
+def load_steady_state(folder) -> AdmittanceData:
+    """The loader of ``problem=admittance``: a slip sweep (``kind: admittance``, above) or the
+    tests of a motor test report (``kind: loadtest``, :mod:`benchmark.problems.admittance.loadtest`),
+    by the ``kind`` of ``meta.yaml``."""
+    folder = Path(folder)
+    meta = read_meta(folder, {"kind": str})
+    if meta["kind"] == "loadtest":
+        from benchmark.problems.admittance.loadtest import load_loadtest
+
+        return load_loadtest(folder)
+    return load_admittance(folder)
 
 
 def write_admittance(folder, data: AdmittanceData, truth: dict | None = None) -> Path:

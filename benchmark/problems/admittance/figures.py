@@ -14,6 +14,10 @@ from benchmark.core.plotting import MEASURED, MODEL, Plot
 def admittance_plots(problem, x: np.ndarray | None, record: dict) -> list[Plot]:
     if x is None:
         return []
+    if problem.data.test is not None:  # a test report: per test, not against one speed axis
+        from benchmark.problems.admittance.loadtest_figures import loadtest_plots
+
+        return loadtest_plots(problem, x, record)
     curves = _admittance_curves(problem, np.asarray(x, float))
     d = problem.data
     err = problem.rms_error_percent(np.asarray(x, float))

@@ -44,12 +44,12 @@ import numpy as np
 
 from benchmark.core.errors import ConfigError
 from benchmark.core.problem import Problem
-from benchmark.problems.admittance.circuit import (
-    input_admittance,
-)
+from benchmark.problems.admittance import reporting
+from benchmark.problems.admittance.circuit import input_admittance, rotor_admittance
 from benchmark.problems.admittance.data import AdmittanceData
+from benchmark.problems.admittance.initial_models import model_a, model_e
 from benchmark.problems.admittance.regression import bilinear_regression
-from benchmark.problems.admittance.thermal import TemperatureProfile, estimate_temperatures
+from benchmark.problems.admittance.thermal import TemperatureProfile, estimate_temperatures, measured_temperatures
 
 __all__ = [
     "AdmittanceProblem",
@@ -62,7 +62,7 @@ __all__ = [
 NAMES_8 = ("R1_total", "X1", "R2", "X2", "R0", "X0", "R2sigma", "X3")
 NAMES_6 = NAMES_8[:6]
 HEAT_MODELS = ("auto", "losses", "current_squared")
-NORMALISATIONS = ("full_scale", "measured")
+NORMALISATIONS = ("auto", "full_scale", "measured", "instrument")
 
 
 def parameter_names_for(model: int, tie_x1_x2: bool) -> tuple[str, ...]:
@@ -81,16 +81,26 @@ class AdmittanceProblem(Problem):
     data : the sweep(s).
     lower, upper : bounds in :attr:`parameter_names` order.
     model : 8 (default) or 6.
-    normalisation : ``full_scale`` or ``measured``.
+    normalisation : ``full_scale``, ``measured``, ``instrument`` (each of G and B over its standard
+        error propagated from the instruments, ``data.sigma_G``, ``data.sigma_B``: a load test) or
+        ``auto`` (``instrument`` when the data give standard errors, else ``full_scale``).
     stalled_torque_weight : weight of the stalled-torque term (0: off; needs a torque column).
     temperature_compensation : ``auto`` (on when the data allow it), True or False.
     heat_model : ``auto``, ``losses`` or ``current_squared`` (see the module docstring).
     tie_x1_x2 : search ``X1`` only, with ``X2 = X1``.
     truth : true parameters (the scoring keys of :meth:`estimate`), or None.
     reference_temperature : deg C to refer resistances to (None: the data's, else the start).
+    magnetising_factor : per reading, ``Xm(psi_i)/Xm(psi_ref)`` from a no-load series (the
+        magnetising branch's parallel reactance is scaled by it, its core-loss conductance kept;
+        :mod:`benchmark.problems.admittance.noload`), or None (no saturation modelled).
+
+    Readings at another supply frequency (``data.frequency_ratio`` k) see reactances ``k X`` and
+    the magnetising branch's series resistance ``k^2 R0`` (a constant core-loss conductance).
     """
 
     name = "admittance"
+    #: Per-phase circuit elements, ohm (reactances at the test frequency); R1 and R1sigma split R1_total.
+    units = {n: "ohm" for n in (*NAMES_8, "R1", "R1sigma")}
     #: the data set's truth document (truth.yaml or the in-memory one), for scoring scripts only
     truth_document: dict | None = None
 
@@ -107,6 +117,7 @@ class AdmittanceProblem(Problem):
         tie_x1_x2: bool = False,
         truth: dict | None = None,
         reference_temperature: float | None = None,
+        magnetising_factor: np.ndarray | None = None,
     ):
         if model not in (6, 8):
             raise ConfigError(f"problem.model: 8 (Lindsay-Barton 8-parameter, default) or 6, got {model!r}")
@@ -118,6 +129,11 @@ class AdmittanceProblem(Problem):
             raise ConfigError(f"problem.stalled_torque_weight: must be >= 0, got {stalled_torque_weight!r}")
         self.data = data
         self.model = int(model)
+        if normalisation == "auto":
+            normalisation = "instrument" if data.sigma_G is not None else "full_scale"
+        if normalisation == "instrument" and data.sigma_G is None:
+            raise ConfigError("problem.normalisation: 'instrument' needs a load test (kind: loadtest), whose "
+                              "readings carry their standard errors")
         self.normalisation = normalisation
         self.tie_x1_x2 = bool(tie_x1_x2)
         self.parameter_names = parameter_names_for(self.model, self.tie_x1_x2)
@@ -134,11 +150,24 @@ class AdmittanceProblem(Problem):
         if np.any(unit <= 0):
             raise ConfigError("problem.normalisation: 'measured' needs non-zero measured admittances")
         self._w = np.broadcast_to(1.0 / unit, s.shape).astype(float)
+        # weights of G and B (the same unless the instruments' standard errors are used)
+        self._wG = self._wB = self._w
+        if normalisation == "instrument":
+            self._wG, self._wB = 1.0 / np.asarray(data.sigma_G, float), 1.0 / np.asarray(data.sigma_B, float)
         self._n_res = 2 * len(s)
+        kf = data.frequency_ratio
+        self._kf = None if kf is None or np.all(np.asarray(kf) == 1.0) else np.asarray(kf, float)
+        self._gm = None if magnetising_factor is None else np.asarray(magnetising_factor, float)
+        self._k1 = None  # a multiplicative copper factor on R1_total (measured temperatures, no DC value)
+        #: set by the set-up: the model choice (benchmark.problems.admittance.model_choice) and the
+        #: magnetising curve used, for the record
+        self.model_choice = None
+        self.magnetising_curve = None
 
         # temperature compensation
         comp = temperature_compensation
-        can = data.stator_dc_resistance is not None and data.time is not None
+        measured = data.winding_temperature is not None
+        can = measured or (data.stator_dc_resistance is not None and data.time is not None)
         self.profile: TemperatureProfile | None = None
         self._comp_note = ""
         if comp == "auto":
@@ -146,15 +175,24 @@ class AdmittanceProblem(Problem):
             if not can:
                 self._comp_note = (
                     "off: the data give no stator_dc_resistance [before, after] or no time column"
+                    " (a sweep), or no temperature column (a load test)"
                 )
         elif comp is True and not can:
             raise ConfigError(
                 "problem.temperature_compensation: true needs 'stator_dc_resistance' [before, after] "
-                f"in meta.yaml and a 'time' column in the sweep tables of {data.source}"
+                f"in meta.yaml and a 'time' column in the sweep tables of {data.source}, or a load "
+                "test's temperature column"
             )
         elif comp not in (True, False):
             raise ConfigError(f"problem.temperature_compensation: auto, true or false, got {comp!r}")
-        if comp:
+        if comp and measured:
+            self.profile = measured_temperatures(data, reference_temperature)
+            self._k = self.profile.factor
+            if np.isfinite(self.profile.R1_ref):
+                self._dR1 = self.profile.R1_ref * (self._k - 1.0)
+            else:
+                self._dR1, self._k1 = np.zeros_like(s), self._k
+        elif comp:
             self.profile = estimate_temperatures(data, heat_model, reference_temperature)
             self._k = self.profile.factor
             self._dR1 = self.profile.R1_ref * (self._k - 1.0)
@@ -164,7 +202,7 @@ class AdmittanceProblem(Problem):
         self.compensated = bool(comp)
         # R1 referred to the reference temperature: separable from R1sigma only via the DC value
         self.R1_dc: float | None = None
-        if self.profile is not None:
+        if self.profile is not None and np.isfinite(self.profile.R1_ref):
             self.R1_dc = self.profile.R1_ref
         elif data.stator_dc_resistance is not None:
             self.R1_dc = float(np.mean(data.stator_dc_resistance))
@@ -232,10 +270,13 @@ class AdmittanceProblem(Problem):
     def admittance(self, X: np.ndarray) -> np.ndarray:
         """Model admittance at every reading, ``(n_pop, N)`` complex S (temperature-compensated)."""
         c = self.full_parameters(X)
+        R1t = c["R1_total"] + self._dR1 if self._k1 is None else c["R1_total"] * self._k1
+        if self._kf is not None or self._gm is not None:
+            return self._scaled_admittance(c, R1t)
         with np.errstate(all="ignore"):
             return input_admittance(
                 self._s,
-                c["R1_total"] + self._dR1,
+                R1t,
                 c["X1"],
                 c["R2"] * self._k,
                 c["X2"],
@@ -244,6 +285,17 @@ class AdmittanceProblem(Problem):
                 c["R2sigma"],
                 c["X3"],
             )
+
+    def _scaled_admittance(self, c, R1t) -> np.ndarray:
+        """:meth:`admittance` with readings at other frequencies and a saturating magnetising branch."""
+        k = np.ones_like(self._s) if self._kf is None else self._kf
+        with np.errstate(all="ignore"):
+            Z0 = c["R0"] * k**2 + 1j * c["X0"] * k
+            if self._gm is not None:
+                Y0 = 1.0 / Z0
+                Z0 = 1.0 / (Y0.real + 1j * Y0.imag / self._gm)
+            Y2 = rotor_admittance(self._s, c["R2"] * self._k, c["X2"] * k, c["R2sigma"], c["X3"] * k)
+            return 1.0 / (R1t + 1j * c["X1"] * k + Z0 / (1.0 + Z0 * Y2))
 
     def stalled_torque(self, X: np.ndarray) -> np.ndarray:
         """Model torque at standstill at the stalled reading's voltage and temperature, N m."""
@@ -262,8 +314,8 @@ class AdmittanceProblem(Problem):
         X = np.atleast_2d(np.asarray(X, float))
         c = self.full_parameters(X)
         Y = self.admittance(X)
-        E = (Y - self._Ym) * self._w
-        R = np.concatenate([E.real, E.imag], axis=1) / np.sqrt(self._n_res)
+        E = Y - self._Ym
+        R = np.concatenate([E.real * self._wG, E.imag * self._wB], axis=1) / np.sqrt(self._n_res)
         if self._stall is not None:
             T = self.stalled_torque(X)
             rt = np.sqrt(self.stalled_torque_weight / self._n_res) * (T - self._stall[0]) / self._stall[0]
@@ -290,6 +342,7 @@ class AdmittanceProblem(Problem):
         c = self.full_parameters(np.asarray(x, float)[None, :])
         names = list(NAMES_8 if self.model == 8 else NAMES_6)
         out = {n: float(c[n][0, 0]) for n in names}
+        out["X1+X2"] = out["X1"] + out["X2"]
         if self.R1_dc is not None:
             out["R1"] = float(self.R1_dc)
             out["R1sigma"] = out["R1_total"] - self.R1_dc
@@ -305,6 +358,8 @@ class AdmittanceProblem(Problem):
         t.setdefault("X3", 0.0)
         if "R1" in t:
             t["R1_total"] = t["R1"] + t["R1sigma"]
+        if "X1" in t and "X2" in t:
+            t["X1+X2"] = t["X1"] + t["X2"]
         keys = self.estimate(0.5 * (self.lower + self.upper)).keys()
         return {k: t[k] for k in keys if k in t}
 
@@ -318,108 +373,26 @@ class AdmittanceProblem(Problem):
         return admittance_plots(self, x, record)
 
     def describe(self) -> dict:
-        d = self.data
-        info = {
-            "data": d.source,
-            "files": d.files,
-            "readings": int(d.n),
-            "frequency_hz": d.frequency,
-            "pole_pairs": d.pole_pairs,
-            "voltage_v": sorted({float(v) for v in np.round(d.voltage, 6)}),
-            "slip_range": [float(self._s.min()), float(self._s.max())],
-            "model": f"{self.model}-parameter" + (" (X1 = X2 tied)" if self.tie_x1_x2 else ""),
-            "cost": "S^2 = mean over G and B of ((Y_calc - Y_meas)/Y_unit)^2"
-            + (f" + stalled-torque term (weight {self.stalled_torque_weight})" if self._stall else ""),
-            "normalisation": self.normalisation,
-            "full_scale_admittance_s": self.full_scale_admittance,
-            "temperature_compensation": self._describe_compensation(),
-            "identifiability": self.identifiability_notes(),
-        }
-        return info
+        """Facts recorded in ``result.json`` (:func:`benchmark.problems.admittance.reporting.describe`)."""
+        return reporting.describe(self)
 
     def quality_warnings(self, x) -> list[str]:
-        """A negative R1sigma (a stray-loss resistance cannot be negative) is reported with why:
-        R1sigma = R1_total - R1 (DC), so it is negative when the fitted R1_total comes out below
-        the DC resistance, within the error of R1_total at realistic noise; the circuit is
-        still valid (only the sum R1_total acts)."""
-        est = self.estimate(x)
-        if est.get("R1sigma", 0.0) < 0:
-            return [f"R1sigma = {est['R1sigma']:.3g} ohm is negative (not physical): R1sigma = R1_total - R1 with "
-                    "R1 the "
-                    f"DC resistance {est['R1']:.4g} ohm, and the fitted R1_total = {est['R1_total']:.4g} ohm came out "
-                    "below it; only R1_total acts on the admittance, so read R1sigma as 0 within the uncertainty of "
-                    "R1_total (see standard_error)"]
-        return []
-
-    def _describe_compensation(self) -> dict:
-        if self.profile is None:
-            return {
-                "active": False,
-                "note": self._comp_note or "off (problem.temperature_compensation: false)",
-            }
-        p = self.profile
-        return {
-            "active": True,
-            "heat_model": p.heat_model,
-            "cooling_rates_known": p.cooling,
-            "theta_before_c": p.theta_before,
-            "theta_after_c": p.theta_after,
-            "theta_ref_c": p.theta_ref,
-            "theta_first_reading_c": float(p.theta[0]),
-            "theta_last_reading_c": float(p.theta[-1]),
-            "R1_dc_at_ref_ohm": p.R1_ref,
-            "notes": p.notes,
-        }
+        """The problem's own warnings (:func:`benchmark.problems.admittance.reporting.quality_warnings`)."""
+        return reporting.quality_warnings(self, x)
 
     def identifiability_notes(self) -> list[str]:
-        notes = []
-        if self.R1_dc is None:
-            notes.append(
-                "R1 and R1sigma act only as their sum at one frequency: R1_total = R1 + R1sigma is "
-                "reported; give stator_dc_resistance to separate them"
-            )
-        else:
-            notes.append(
-                "R1 is the DC stator resistance referred to the reference temperature (measured, not "
-                "fitted); R1sigma = R1_total - R1 inherits the error of R1_total"
-            )
-        if not self.tie_x1_x2:
-            if self._s.min() >= 0 and self.model == 8:
-                notes.append(
-                    "no generating-region readings (s < 0): re-referring the rotor trades R2sigma "
-                    "against the X1/X2 split without changing Y; tie X1 = X2 (problem.tie_x1_x2)"
-                )
-            else:
-                notes.append(
-                    "X1 and X2 are separated only through the small R0 and (8-parameter) the sign "
-                    "change of R2sigma at s = 0: their split is weakly determined at realistic noise"
-                )
-        notes.append("R0 is weakly determined at low voltage: quote its spread over noise realisations")
-        return notes
+        return reporting.identifiability_notes(self)
 
     # -- the hook used by plugins.lindsay_barton ---------------------------------------------
 
     def initial_guess(self, kind: str) -> np.ndarray | None:
-        """The paper's initial models from the data alone (no cost evaluation), clipped into the bounds:
-
-        * ``"A"``: crude reading of the admittance at synchronous speed (``Z1 + Z0``) and at
-          standstill (``Z1 + Z2``, magnetising branch neglected), split equally between stator and
-          rotor; second-order terms set arbitrarily (``R2sigma = 0.05 R2``, ``X3 = 0.02 X2``).
-        * ``"E"``: the Sanathanan-Koerner regression of the bilinear form (8-parameter: in the warped
-          slip, with an outer search over ``R2sigma/R2``, ``X3/R2``), mapped back to the circuit with
-          ``X1``, ``X2`` free when that gives a circuit inside the bounds, else with the tie ``X1 = X2``
-          (:attr:`last_mapping` says which); with temperature compensation the data are then referred
-          to the reference temperature with that circuit and the regression repeated until the circuit
-          stops changing (at most 10 passes).
-
-        Returns None for an unknown kind."""
+        """The paper's initial models ``"A"`` or ``"E"`` from the data alone (no cost evaluation),
+        clipped into the bounds (:mod:`benchmark.problems.admittance.initial_models`; ``"E"`` sets
+        :attr:`last_mapping`). Returns None for an unknown kind."""
         kind = str(kind).upper()
-        if kind == "A":
-            vals = self._model_a()
-        elif kind == "E":
-            vals = self._model_e()
-        else:
+        if kind not in ("A", "E"):
             return None
+        vals = model_a(self) if kind == "A" else model_e(self)
         x = np.array([vals[n] for n in self.parameter_names], float)
         span = self.upper - self.lower
         return np.clip(
@@ -427,64 +400,3 @@ class AdmittanceProblem(Problem):
             self.lower + 1e-6 * span,
             self.upper - 1e-6 * span,
         )
-
-    def _admittance_at(self, s0: float) -> complex:
-        order = np.argsort(self._s, kind="stable")
-        s_sorted, Y_sorted = self._s[order], self._Ym[order]
-        near = np.abs(s_sorted - s0) < 1e-9
-        if near.any():
-            return complex(Y_sorted[near].mean())
-        return complex(np.interp(s0, s_sorted, Y_sorted.real) + 1j * np.interp(s0, s_sorted, Y_sorted.imag))
-
-    def _model_a(self) -> dict[str, float]:
-        Z_nl = 1.0 / self._admittance_at(0.0)
-        Z_sc = 1.0 / self._admittance_at(1.0)
-        R = Z_sc.real / 2
-        X = Z_sc.imag / 2
-        return {
-            "R1_total": R,
-            "X1": X,
-            "R2": R,
-            "X2": X,
-            "R0": Z_nl.real - R,
-            "X0": Z_nl.imag - X,
-            "R2sigma": 0.05 * R,
-            "X3": 0.02 * X,
-        }
-
-    def _model_e(self) -> dict[str, float]:
-        Y = self._Ym
-        warp0 = (0.05, 0.02)
-        x_prev = None
-        for _ in range(10 if self.compensated else 1):
-            reg = bilinear_regression(self._s, Y, self._w, model=self.model, warp0=warp0)
-            out = self._pick_mapping(reg)
-            warp0 = (reg["rho"], reg["xi"])
-            if not self.compensated:
-                break
-            # refer the data to the reference temperature with this circuit, and fit again until the
-            # circuit stops changing (a fixed point: the data corrected by the fitted circuit's own
-            # temperature effect are fitted by that circuit)
-            x = np.array([out[n] for n in self.parameter_names])
-            if x_prev is not None and np.all(np.abs(x - x_prev) <= 1e-10 * np.maximum(np.abs(x), 1e-12)):
-                break
-            x_prev = x
-            c = self.full_parameters(x)
-            Y_ref = input_admittance(
-                self._s, c["R1_total"], c["X1"], c["R2"], c["X2"], c["R0"], c["X0"], c["R2sigma"], c["X3"]
-            )[0]
-            Y = self._Ym + (Y_ref - self.admittance(x)[0])
-        self.last_mapping = out["mapping"]
-        return out
-
-    def _pick_mapping(self, reg: dict) -> dict:
-        """The free mapping when it is physical and inside the bounds (and X1, X2 are not tied),
-        else the tied one."""
-        free = reg["free"]
-        if not self.tie_x1_x2:
-            x = np.array([free[n] for n in self.parameter_names])
-            if np.all(np.isfinite(x)) and np.all(x >= self.lower) and np.all(x <= self.upper):
-                return free | {"mapping": "free"}
-        return reg["tied"] | {"mapping": "tied (X1 = X2)"}
-
-

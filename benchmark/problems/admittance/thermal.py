@@ -165,3 +165,31 @@ def estimate_temperatures(
         cooling=cooling,
         notes=notes,
     )
+
+
+def measured_temperatures(data: AdmittanceData, theta_ref: float | None = None) -> TemperatureProfile:
+    """The profile of readings whose winding temperature was measured (a load test's
+    ``temperature`` column): no thermal model. ``R1_ref`` is the DC resistance referred to
+    ``theta_ref`` (nan without one: the fitted R1_total is then scaled by the copper factor)."""
+    theta = np.asarray(data.winding_temperature, float)
+    if theta_ref is None:
+        theta_ref = data.reference_temperature
+    notes = ["winding temperature measured at each reading (temperature column)"]
+    if theta_ref is None:
+        theta_ref = float(np.median(theta))
+        notes.append(f"resistances referred to the median reading temperature, {theta_ref:g} C")
+    theta_dc = data.winding_temperature_before
+    R1_ref = np.nan
+    if data.stator_dc_resistance is not None and theta_dc is not None:
+        R1_ref = float(np.mean(data.stator_dc_resistance)) * float(copper_factor(theta_ref, theta_dc))
+    return TemperatureProfile(
+        theta=theta,
+        theta_before=float("nan") if theta_dc is None else float(theta_dc),
+        theta_after=float("nan"),
+        theta_ref=float(theta_ref),
+        R1_ref=float(R1_ref),
+        factor=np.asarray(copper_factor(theta, theta_ref)),
+        heat_model="measured",
+        cooling=False,
+        notes=notes,
+    )

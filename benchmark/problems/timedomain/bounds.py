@@ -10,6 +10,7 @@ import numpy as np
 
 from benchmark.core.errors import ConfigError
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.frames import fundamental, phasor_speed
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 
@@ -33,13 +34,11 @@ def derive_bounds(ds: StartupDataset, names: tuple[str, ...]) -> dict[str, tuple
     i = r.i_alpha + 1j * r.i_beta
     t = r.t
     # electrical supply frequency from the voltage phasor's rotation over the tail
-    phase = np.unwrap(np.angle(v[tail]))
-    w_e = abs(np.polyfit(t[tail], phase, 1)[0])
+    w_e = abs(phasor_speed(r.v_alpha[tail], r.v_beta[tail], t[tail]))
     if not w_e > 0:
         raise ConfigError("bounds: cannot derive bounds: the start-up voltage does not rotate; give bounds=...")
-    rot = np.exp(-1j * w_e * t[tail])
-    V1 = abs(np.mean(v[tail] * rot))
-    I0 = abs(np.mean(i[tail] * rot))
+    V1 = abs(fundamental(v[tail], t[tail], w_e))
+    I0 = abs(fundamental(i[tail], t[tail], w_e))
     I_pk = float(np.max(np.abs(i)))
     Ls0 = V1 / (I0 * w_e)
     Z_sc = V1 / I_pk
@@ -103,9 +102,12 @@ def check_config(run) -> None:
     case = pcfg.get("friction_case", 2)
     if isinstance(case, bool) or case not in (1, 2):
         raise ConfigError(f"problem.friction_case: must be 1 (no Coulomb friction) or 2 (with), got {case!r}")
-    rs = pcfg.get("stator_resistance", "free")
-    if rs not in ("free", "prior", "fixed"):
-        raise ConfigError(f"problem.stator_resistance: must be free, prior or fixed, got {rs!r}")
+    rs = pcfg.get("stator_resistance", "auto")
+    if rs not in ("free", "prior", "fixed", "auto"):
+        raise ConfigError(f"problem.stator_resistance: must be free, prior, fixed or auto, got {rs!r}")
+    spread = pcfg.get("stator_prior_spread", 20.0)
+    if isinstance(spread, bool) or not isinstance(spread, (int, float)) or not math.isfinite(spread) or spread <= 0:
+        raise ConfigError(f"problem.stator_prior_spread: must be a positive number of kelvin, got {spread!r}")
     held = pcfg.get("held_friction")
     if held is not None:
         if not hasattr(held, "items") or sorted(str(k) for k in held) != ["fc", "fv"]:

@@ -1,4 +1,4 @@
-"""Time-domain data sets (``kind: startup``, the README's Data sets): load, validate, write.
+"""Time-domain data sets (``kind: startup``, docs/data_format.md): load, validate, write.
 
 A folder holds ``meta.yaml``, one or more ``startup*.csv`` and optionally ``stop*.csv``.
 Start-up columns: ``t``; voltages ``v_alpha, v_beta`` or phase ``v_r, v_s, v_t``; currents
@@ -33,6 +33,7 @@ from benchmark.core.tables import (
     read_table,
 )
 from benchmark.problems.timedomain.frames import clarke
+from benchmark.problems.timedomain.load_checks import check_records
 
 VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"))
 CURRENT_COLUMNS = (("i_alpha", "i_beta"), ("i_r", "i_s"))
@@ -70,7 +71,8 @@ class StartupRecord:
     samples count), switch_on_sample (the sample just after a measured switch-on's switching
     steps, whose volt-seconds the conditioning corrected from the current's response: what is
     left of their error is estimated with the parameters as a stator flux step there; None: no
-    such switch-on).
+    such switch-on), columns (the file's column names of ``voltage`` and ``current``, for
+    messages; None for a record made in memory).
     """
 
     t: np.ndarray
@@ -83,6 +85,7 @@ class StartupRecord:
     torque: np.ndarray | None = None
     weight: np.ndarray | None = None
     switch_on_sample: int | None = None
+    columns: dict | None = None  # the file's columns of each quantity ("voltage": "v_r, v_s, v_t"), for messages
 
     @property
     def has_speed(self) -> bool:
@@ -223,6 +226,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     startups = [_read_startup(f, ts, max_bytes, speed_unit=unit) for f in startup_files]
     stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
     _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
+    check_records(startups, optional.get("nameplate"), p, hold, meta_path)
     ds = StartupDataset(
         pole_pairs=p,
         sample_time=ts,
@@ -331,8 +335,10 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
                                            "simulated, not fitted; J then comes from the currents alone)"),
                       stacklevel=3)
     torque = df["torque"].to_numpy() if "torque" in df else None
+    columns = {"voltage": "v_alpha, v_beta" if "v_alpha" in cols else "v_r, v_s, v_t",
+               "current": "i_alpha, i_beta" if "i_alpha" in cols else "i_r, i_s"}
     return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed,
-                         source=str(path), torque=torque)
+                         source=str(path), torque=torque, columns=columns)
 
 
 def _read_stop(path: Path, max_bytes: int | None = None, *, speed_unit: str = "rad/s") -> StopRecord:

@@ -20,7 +20,8 @@ import numpy as np
 
 #: Order of the physical parameters everywhere a vector of them is used.
 PARAMETER_NAMES = ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")
-PARAMETER_UNITS = {"Rs": "ohm", "Ls": "H", "Le": "H", "Rr": "ohm", "J": "kg m^2", "fv": "N m s", "fc": "N m"}
+#: Unit of each parameter (fv per mechanical rad/s).
+PARAMETER_UNITS = {"Rs": "ohm", "Ls": "H", "Le": "H", "Rr": "ohm", "J": "kg m^2", "fv": "N m s/rad", "fc": "N m"}
 
 #: Columns of the coefficient matrix the compiled simulation reads, in this order.
 COEFFICIENT_NAMES = ("a11", "a13", "c1", "c2", "a31", "a33", "kt", "inv_tau_m", "b_m", "fc")

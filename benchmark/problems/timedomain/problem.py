@@ -33,14 +33,17 @@ from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config:
 )
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.filters import zero_phase_lowpass
+from benchmark.problems.timedomain.frames import phasor_speed
 from benchmark.problems.timedomain.mechanical import MechanicalEstimate, fit_free_stop
-from benchmark.problems.timedomain.motor import PARAMETER_NAMES, coefficients
+from benchmark.problems.timedomain.motor import PARAMETER_NAMES, PARAMETER_UNITS, coefficients
+from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
+from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
 
 
-class TimeDomainProblem(SwitchOnFlux, Problem):
+class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
     """Start-up record fit. See the module docstring for the cost and the searched set.
 
     Parameters
@@ -54,19 +57,22 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
     weights : (ka, kb, kw). The speed weight is set to 0 when no record has a speed (a record
         without a speed sensor has ``speed`` all NaN; those NaN are replaced by 0 in the arrays).
     truth : true parameters for scoring, or None.
-    stator_resistance : ``free`` (searched), ``prior`` (searched, with a penalty residual pulling
-        it towards the DC value, see :meth:`prior_residual`) or ``fixed`` (not searched: held at
-        the DC value). ``prior`` and ``fixed`` need ``dataset.stator_dc_resistance``.
+    stator_resistance : ``free`` (searched), ``prior`` (searched, with the DC value as a Gaussian
+        prior weighed against the data: :mod:`benchmark.problems.timedomain.stator_prior`) or
+        ``fixed`` (not searched: held at the DC value). ``prior`` and ``fixed`` need
+        ``dataset.stator_dc_resistance``.
+    prior_spread : K, one-sigma spread of the winding's temperature during the record about its
+        temperature at the DC measurement (the prior's width).
     """
 
     name = "timedomain"
     #: Units of the parameters (messages and report).
-    units = {"Rs": "ohm", "Ls": "H", "Le": "H", "Rr": "ohm", "J": "kg m^2", "fv": "N m s/rad", "fc": "N m"}
+    units = PARAMETER_UNITS
 
     def __init__(self, dataset: StartupDataset, lower, upper, mechanical: MechanicalEstimate | None = None,
                  inertia: float | None = None, exponent: int = 1, weights=(1.0, 1.0, 0.5),
                  truth: dict | None = None, stator_resistance: str = "free",
-                 held_friction: tuple[float, float] | None = None):
+                 held_friction: tuple[float, float] | None = None, prior_spread: float = DEFAULT_SPREAD_K):
         if exponent not in (1, 2):
             raise ConfigError(f"problem.cost.exponent: must be 1 (eq. 15) or 2 (eq. 14), got {exponent}")
         self.dataset = dataset
@@ -113,7 +119,10 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         self._current_used = [None if r.weight is None else np.ascontiguousarray(np.asarray(r.weight, bool))
                               for r in dataset.startups]
         self._noise = None  # per-channel noise estimates, made on first use (see channel_noise)
-        self._prior_scale = None
+        # what the problem was made from (problem_from_dataset): settings and the loaded data set
+        self.settings: TimeDomainSettings | None = None
+        self.loaded_dataset: StartupDataset | None = None
+        self._init_prior(prior_spread)
         self._init_switch_on_flux()
 
     # -- parameter vectors -------------------------------------------------------------
@@ -144,88 +153,22 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         for (v_a, v_b, i_a, i_b, w), used in zip(self._records, self._current_used, strict=True):
             total += startup_cost_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time, i_a, i_b, w,
                                         float(self.dataset.pole_pairs), self.weights, self.exponent, used)
-        if self.stator_resistance == "prior":
-            p = self.prior_residual(X)
-            total = total + (p**2 if self.exponent == 2 else np.abs(p))
+        if self.prior_active:
+            total = total + self.prior_cost(X)
         return total
-
-    # -- stator resistance prior -------------------------------------------------------
-    #: Relative one-sigma uncertainty of the DC resistance as a value of Rs during the record
-    #: (measurement, and the winding temperature drifting from the DC measurement's).
-    RS_PRIOR_REL_STD = 0.05
-
-    def prior_residual(self, X: np.ndarray) -> np.ndarray:
-        """The penalty residual of ``stator_resistance=prior``, one per candidate:
-        ``s (Rs - R_dc) / (0.05 R_dc)``, ``s`` the noise of one weighted sample (square root of
-        the sum over channels of weight x noise variance, from :meth:`channel_noise`). With
-        eq. 14 its square is the Gaussian prior ``Rs ~ N(R_dc, (0.05 R_dc)^2)`` in the units of
-        the cost (a MAP estimate); with eq. 15 its absolute value is added (a Laplace prior of
-        about the same width). The DC value is used as measured (no temperature correction:
-        the record is taken to be at ``winding_temperature``)."""
-        X = np.atleast_2d(np.asarray(X, float))
-        if self._prior_scale is None:
-            var = 0.0
-            for per_record in self.channel_noise():
-                for c, est in enumerate(per_record):
-                    if est is not None:
-                        var += self.weights[c] * est.std**2
-            self._prior_scale = math.sqrt(var) if var > 0 else 1e-3
-        rs = X[:, self.parameter_names.index("Rs")]
-        return self._prior_scale * (rs - self.rs_dc) / (self.RS_PRIOR_REL_STD * self.rs_dc)
 
     # -- noise, fit quality and warnings (benchmark.core.quality) ----------------------------
     def channel_noise(self) -> list[list]:
         """Per record, the noise estimate (:class:`benchmark.core.noise_estimates.NoiseEstimate`) of
-        i_alpha, i_beta and speed (None where not measured or not estimable), from the data alone:
-        a constant + linear trend + every harmonic of the supply frequency below Nyquist (at most
-        200) fitted over the last
-        quarter of the record (the steady state after the start; coloured noise stays in the
-        residual). Where that quarter holds fewer than ``2 * PERIODS_PER_BLOCK`` supply periods
-        (a short record), the diagnosis's estimate (:func:`~benchmark.problems.timedomain.
-        diagnosis.noise.startup_noise`: the pre-trigger, else the supply's harmonics with
-        drifting amplitudes over the steady state). A smoothing fit of a current is no noise
-        estimate: at 1 kHz on a 60 Hz supply a 21-sample window spans more than a period, and on
-        an independent-plant start of 0.4 s it put the current noise at 36 A (the truth: 0.17 A),
-        so the fit quality read "below the noise level". A noise-free record gets a floor of 1e-7
-        of the channel's RMS."""
-        if self._noise is not None:
-            return self._noise
-        from benchmark.core.noise_estimates import NoiseEstimate
-        from benchmark.problems.timedomain.diagnosis.noise import startup_noise
-
-        fs = 1.0 / self.dataset.sample_time
-        out = []
-        for (v_a, v_b, i_a, i_b, w) in self._records:
-            n = len(i_a)
-            tail = slice(int(0.75 * n), n)
-            f0 = _supply_frequency(v_a[tail], v_b[tail], self.dataset.sample_time) or self.dataset.supply_frequency
-            short: dict | None = None
-            ests = []
-            for c, x in enumerate((i_a, i_b, w)):
-                if c == 2 and not self.speed_measured:
-                    ests.append(None)
-                    continue
-                est = None
-                try:
-                    if f0 and f0 > 0 and (n - tail.start) * f0 / fs >= 2 * PERIODS_PER_BLOCK:
-                        est = _blockwise_periodic_noise(x[tail], fs, f0)
-                except (ValueError, np.linalg.LinAlgError, FloatingPointError):
-                    est = None
-                if est is None:
-                    if short is None:
-                        short = startup_noise(np.arange(n) / fs, v_a, v_b, i_a, i_b,
-                                              w if self.speed_measured else None,
-                                              float(f0 or self.dataset.supply_frequency))
-                    est = short.get(("i_alpha", "i_beta", "speed")[c])
-                if est is not None:
-                    floor = 1e-7 * float(np.sqrt(np.mean(x**2)))
-                    if not est.std > floor:
-                        est = NoiseEstimate(floor, est.rel_uncertainty, est.n_effective,
-                                            est.method + " (noise-free record: floor 1e-7 of the channel RMS)")
-                ests.append(est)
-            out.append(ests)
-        self._noise = out
-        return out
+        i_alpha, i_beta and speed (None where not measured), from the data alone: the one estimate
+        of :func:`benchmark.problems.timedomain.noise.record_noise` that the diagnosis uses too (a
+        quiet pre-trigger, else the steady state's supply harmonics with drifting amplitudes;
+        quantised channels at least ``q / sqrt(12)``; coloured noise and the estimate's own
+        uncertainty allowed for)."""
+        if self._noise is None:
+            self._noise = [[record_noise(r, self.dataset.supply_frequency)[0].get(c) for c in WEIGHT_KEYS]
+                           for r in self.dataset.startups]
+        return self._noise
 
     def hac_bandwidth_floor(self) -> float:
         """Smallest Bartlett bandwidth (samples) of the HAC covariance: one supply period
@@ -244,25 +187,74 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             for c, key in enumerate(WEIGHT_KEYS):
                 out.append((key if len(self._records) == 1 else f"{key}[{j}]", offset + c * m, offset + (c + 1) * m))
             offset += 3 * m
-        if self.stator_resistance == "prior":
+        if self.prior_active:
             out.append(("Rs prior", offset, offset + 1))
         return out
 
+    def noise_levels(self, x) -> list[dict]:
+        """Per record, ``{channel: NoiseEstimate}`` of the residual at ``x``: :meth:`channel_noise`,
+        and for measured continuous voltages (``input_hold: linear``) each channel raised by the
+        voltage's own noise carried through the model at ``x``
+        (:func:`benchmark.problems.timedomain.voltage_noise.with_propagated_voltage_noise`, as
+        the diagnosis does: the motor saw the clean voltage, the model the noisy one)."""
+        levels = [{k: est for k, est in zip(WEIGHT_KEYS, per_record, strict=True) if est is not None}
+                  for per_record in self.channel_noise()]
+        if not self._linear:
+            return levels
+        from benchmark.problems.timedomain.voltage_noise import with_propagated_voltage_noise
+
+        coef = coefficients(self.full_parameters(np.asarray(x, float)[None, :]), self.dataset.pole_pairs)
+        out = []
+        for noise, rec, (v_a, v_b, *_) in zip(levels, self.dataset.startups, self._records, strict=True):
+            def simulate(va, vb, noise=noise):
+                y = startup_outputs_batch(coef, np.ascontiguousarray(va), np.ascontiguousarray(vb), True,
+                                          self.dataset.sample_time, float(self.dataset.pole_pairs))[0]
+                return {k: y[c] for c, k in enumerate(WEIGHT_KEYS) if k in noise}
+
+            speed = rec.speed if rec.has_speed else None
+            out.append(with_propagated_voltage_noise(noise, simulate, rec.t, v_a, v_b, rec.i_alpha, rec.i_beta,
+                                                     speed, float(self.dataset.supply_frequency or
+                                                                  supply_frequency_of(rec.t, v_a, v_b)))[0])
+        return out
+
     def fit_channels(self, x) -> list[tuple]:
-        """(channel, held-in residual ``measured - simulated`` in A or rad/s, noise estimate) of
-        every measured, weighted channel at ``x``."""
+        """(channel, held-in residual ``measured - simulated`` in A or rad/s, noise estimate of
+        :meth:`noise_levels`) of every measured, weighted channel at ``x``."""
         sims = self.simulate(np.asarray(x, float)[None, :])
         out = []
-        for j, (sim, rec, noise, used) in enumerate(zip(sims, self._records, self.channel_noise(),
+        for j, (sim, rec, noise, used) in enumerate(zip(sims, self._records, self.noise_levels(x),
                                                         self._current_used, strict=True)):
             for c, key in enumerate(WEIGHT_KEYS):
-                if self.weights[c] == 0 or noise[c] is None:
+                if self.weights[c] == 0 or key not in noise:
                     continue
                 r = rec[2 + c] - sim[0, c]
                 if c < 2 and used is not None:  # masked current samples are not part of the fit
                     r = r[used]
-                out.append((key if len(self._records) == 1 else f"{key}[{j}]", r, noise[c]))
+                out.append((key if len(self._records) == 1 else f"{key}[{j}]", r, noise[key]))
         return out
+
+    def second_look(self, x, identify, seed: int) -> dict | None:
+        """The identification's second look (:func:`benchmark.core.review.review`, called where the
+        fit at ``x`` misses the data): the stop record's check
+        (:func:`benchmark.problems.timedomain.stop_record.stop_record_check`, the diagnosis's
+        too). Returns ``{"record", "lines", "problem", "identification"}``, the last two the
+        start-up-alone problem and its identification (``identify(problem, seed=...)``) when the
+        stop record is set aside, else None; None when there is no check to make."""
+        from types import SimpleNamespace
+
+        from benchmark.problems.timedomain.stop_record import stop_record_check, stop_record_lines
+
+        if self.settings is None:
+            return None
+        check = stop_record_check(self.settings, self.loaded_dataset, self, SimpleNamespace(x=np.asarray(x, float)),
+                                  identify, seed)
+        if check is None:
+            return None
+        record, alone, ident_alone = check
+        aside = not record["used"]
+        alone.truth = self.truth  # (scoring only)
+        return {"record": record, "lines": stop_record_lines(record, "the identification uses"),
+                "problem": alone if aside else None, "identification": ident_alone if aside else None}
 
     #: Rs departing from the DC resistance by more than this (relative) is reported.
     RS_DC_TOLERANCE = 0.20
@@ -276,11 +268,15 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             if abs(dev) > self.RS_DC_TOLERANCE:
                 temp = getattr(self.dataset, "winding_temperature", None)
                 at = f" at {temp:g} C" if temp is not None else ""
+                advice = ("even with the DC value as its prior: the data pull it there (the model misses the data, "
+                          "or the winding's temperature is far from the DC measurement's); add "
+                          "problem.stator_resistance=fixed to hold it, and diagnose the data"
+                          if self.stator_resistance == "prior" else
+                          "the fit may be in a wrong minimum or the model misses the data; add "
+                          "problem.stator_resistance=prior (or fixed) to the command, and diagnose the data")
                 out.append(f"Rs = {rs:.4g} ohm departs from the DC resistance {self.rs_dc:.4g} ohm{at} "
                            f"(meta.yaml stator_dc_resistance) by {100 * dev:+.0f} % (more than "
-                           f"{100 * self.RS_DC_TOLERANCE:.0f} %): the fit may be in a wrong minimum or the model "
-                           "misses "
-                           "the data; try problem.stator_resistance=prior or fixed, and run benchmark.diagnose")
+                           f"{100 * self.RS_DC_TOLERANCE:.0f} %) {advice}")
         return out
 
     def simulate(self, X: np.ndarray) -> list[np.ndarray]:
@@ -302,7 +298,7 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             if used is not None:  # masked current samples: residual 0 (no cost, no Jacobian row)
                 e[:, :2, ~used] = 0.0
             parts.append(e.reshape(len(sim), -1))
-        if self.stator_resistance == "prior":
+        if self.prior_active:
             parts.append(self.prior_residual(X)[:, None])
         r = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(r), r, np.nan)
@@ -321,8 +317,8 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
             block = r[offset:offset + 3 * m].reshape(3, m)
             total += float(np.sqrt(self.weights) @ np.abs(block).sum(axis=1))
             offset += 3 * m
-        if self.stator_resistance == "prior":
-            total += float(abs(r[offset]))
+        if self.prior_active:
+            total += self.prior.cost_of_residual(r[offset])
         return total
 
     @property
@@ -367,41 +363,10 @@ class TimeDomainProblem(SwitchOnFlux, Problem):
         return d
 
 
-#: Supply periods per block of the blockwise periodic noise estimate.
-PERIODS_PER_BLOCK = 4
-
-
-def _blockwise_periodic_noise(x, fs: float, f0: float):
-    """Noise of a nearly periodic segment: :func:`benchmark.core.noise_estimates.noise_from_periodic`
-    (constant, trend, every harmonic below Nyquist up to 200) on consecutive blocks of
-    ``PERIODS_PER_BLOCK`` supply periods, pooled (variances weighted by their degrees of
-    freedom). Short blocks follow a slowly changing amplitude (a start that has not quite
-    settled) that one fit over the whole segment would count as noise."""
-    from benchmark.core.noise_estimates import NoiseEstimate, noise_from_periodic, refine_frequency
-
-    x = np.asarray(x, float)
-    nh = min(200, int(0.5 * fs / f0))
-    f = refine_frequency(x, fs, f0, min(nh, 10))
-    block = int(round(PERIODS_PER_BLOCK * fs / f))
-    ests = [noise_from_periodic(x[a:a + block], fs, f, n_harmonics=nh, refine_f0=False)
-            for a in range(0, len(x) - block + 1, block)]
-    if not ests:
-        raise ValueError("segment shorter than one block")
-    dof = np.array([e.n_effective for e in ests])
-    var = float(np.sum(dof * np.array([e.std**2 for e in ests])) / np.sum(dof))
-    n_eff = float(np.sum(dof))
-    return NoiseEstimate(math.sqrt(var), 1.0 / math.sqrt(2 * n_eff), n_eff,
-                         f"periodic fit ({f:.4f} Hz, {nh} harmonics) on {len(ests)} blocks of "
-                         f"{PERIODS_PER_BLOCK} periods")
-
-
 def _supply_frequency(v_a, v_b, dt: float) -> float | None:
     """Electrical frequency (Hz) from the rotation of the voltage phasor, or None."""
-    phase = np.unwrap(np.angle(np.asarray(v_a) + 1j * np.asarray(v_b)))
-    if len(phase) < 8:
-        return None
-    w = abs(np.polyfit(np.arange(len(phase)) * dt, phase, 1)[0])
-    return float(w / (2 * np.pi)) if np.isfinite(w) and w > 0 else None
+    w = abs(phasor_speed(v_a, v_b, np.arange(len(v_a)) * dt))
+    return w / (2 * np.pi) if w > 0 else None
 
 
 # -- set-up from typed settings ---------------------------------------------------------
@@ -414,6 +379,7 @@ def setup_problem(settings: TimeDomainSettings, dataset: StartupDataset, truth_d
 
 def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth: dict | None) -> TimeDomainProblem:
     """Conditioning, mechanical pre-identification from the stop record, bounds, and the problem."""
+    loaded = ds
     ds = condition(ds, speed_filter=settings.speed_filter)
     mechanical = None
     if ds.stops:
@@ -428,10 +394,13 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
                  "(problem.held_friction), not searched: J absorbs any difference from the true friction, "
                  "which its standard error does not include"),
             stacklevel=2)
-    names = ([] if settings.stator_resistance == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
+    rs_mode = settings.stator_resistance
+    if rs_mode == "auto":  # the DC resistance in meta.yaml makes the prior the default
+        rs_mode = "prior" if ds.stator_dc_resistance else "free"
+    names = ([] if rs_mode == "fixed" else ["Rs"]) + ["Ls", "Le", "Rr"] + \
         (["J"] if inertia is None else []) + ([] if mechanical or held is not None else ["fv", "fc"])
     bounds = choose_bounds(settings, names, ds)
-    return TimeDomainProblem(
+    problem = TimeDomainProblem(
         ds,
         lower=[bounds[n][0] for n in names],
         upper=[bounds[n][1] for n in names],
@@ -440,13 +409,17 @@ def problem_from_dataset(settings: TimeDomainSettings, ds: StartupDataset, truth
         exponent=settings.exponent,
         weights=list(settings.weights),
         truth=truth,
-        stator_resistance=settings.stator_resistance,
+        stator_resistance=rs_mode,
         held_friction=held,
+        prior_spread=settings.stator_prior_spread,
     )
+    problem.settings, problem.loaded_dataset = settings, loaded
+    problem.prior_by_default = settings.stator_resistance == "auto" and rs_mode == "prior"
+    return problem
 
 
 def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
-    """Paper conditioning of the start-up speed (optional, see README): zero-phase low-pass."""
+    """Paper conditioning of the start-up speed (optional, docs/time_domain.md): zero-phase low-pass."""
     if not speed_filter:
         return ds
     from dataclasses import replace

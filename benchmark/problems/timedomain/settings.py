@@ -27,8 +27,12 @@ class TimeDomainSettings:
     bounds : the user's search bounds {name: (low, high)} (SI units), or None.
     preset_bounds : the motor preset's bounds, used where the user gives none, or None.
     known_inertia : the inertia (kg m^2) when the preset declares it known, else None.
-    stator_resistance : ``free`` (searched), ``prior`` (searched, pulled towards the DC value)
-        or ``fixed`` (held at the DC value of ``meta.yaml``'s ``stator_dc_resistance``).
+    stator_resistance : ``free`` (searched), ``prior`` (searched, with the DC value of
+        ``meta.yaml``'s ``stator_dc_resistance`` as a Gaussian prior), ``fixed`` (held at the DC
+        value) or ``auto`` (``prior`` when the data set gives the DC value, else ``free``).
+    stator_prior_spread : K, one-sigma spread of the winding's temperature during the record about
+        its temperature at the DC measurement: the prior's width
+        (:mod:`benchmark.problems.timedomain.stator_prior`).
     held_friction : (fv in N m s/rad, fc in N m) held instead of searched where no stop record
         fixes the friction (an assumption the user states, e.g. for a record without a speed
         sensor), or None (searched).
@@ -41,7 +45,8 @@ class TimeDomainSettings:
     bounds: dict[str, tuple[float, float]] | None = None
     preset_bounds: dict[str, tuple[float, float]] | None = None
     known_inertia: float | None = None
-    stator_resistance: str = "free"
+    stator_resistance: str = "auto"
+    stator_prior_spread: float = 20.0
     held_friction: tuple[float, float] | None = None
     extra: dict = field(default_factory=dict)
 
@@ -65,7 +70,8 @@ class TimeDomainSettings:
             bounds=_pairs(run.get("bounds")),
             preset_bounds=_pairs(motor.get("bounds")) if from_preset else None,
             known_inertia=known,
-            stator_resistance=str(problem.get("stator_resistance", "free")),
+            stator_resistance=str(problem.get("stator_resistance", "auto")),
+            stator_prior_spread=float(problem.get("stator_prior_spread", 20.0)),
             held_friction=_friction_pair(problem.get("held_friction")),
         )
 

@@ -1,4 +1,4 @@
-"""A stop record that is no free coast (:func:`benchmark.problems.timedomain.diagnosis.run.stop_record_check`).
+"""A stop record that is no free coast (:func:`benchmark.problems.timedomain.stop_record.stop_record_check`).
 
 Independent plant (``synthetic.independent``): a 7.5 kW six-step start (a blind set, remade from
 its truth file), after which the inverter holds its zero vector. The stator is short-circuited and
@@ -25,6 +25,7 @@ from benchmark.problems.timedomain.conditioning import condition_dataset
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.diagnosis import run as run_mod
 from benchmark.problems.timedomain.settings import TimeDomainSettings
+from benchmark.problems.timedomain.stop_record import STOP_INERTIA_CONFLICT, stop_record_check
 from synthetic.independent import make_dataset, make_spec, write_dataset
 from tests.conftest import compose_config
 
@@ -67,7 +68,7 @@ def _base(tmp_path, scenario):
 def test_a_braking_stop_is_set_aside_and_the_start_up_finds_J(tmp_path):
     est, used_ds, record, truth = _base(tmp_path, "blind")
     sr = record["stop_record"]
-    assert not sr["used"] and sr["ratio"] < 1.0 / run_mod.STOP_INERTIA_CONFLICT, sr
+    assert not sr["used"] and sr["ratio"] < 1.0 / STOP_INERTIA_CONFLICT, sr
     assert used_ds.stops == []
     assert est["J"] == pytest.approx(truth["J"], rel=0.05)
     assert sr["J_with_stop"] < 0.5 * truth["J"]  # what the base would have been
@@ -107,9 +108,27 @@ def test_a_start_up_alone_search_in_a_worse_basin_keeps_the_stop(tmp_path):
         x = np.array([truth[n] / (6.0 if n == "J" else 1.0) for n in problem.parameter_names])
         return SimpleNamespace(x=x, cost=float(problem.evaluate(x[None, :])[0]))
 
-    record, alone, ident_alone = run_mod.stop_record_check(settings, ds, with_stop, ident, search_in_a_worse_basin, 0)
+    record, alone, ident_alone = stop_record_check(settings, ds, with_stop, ident, search_in_a_worse_basin, 0)
     assert record["ratio"] == pytest.approx(6.0, rel=1e-9)
     assert record["start_cost_at_stop_fit"] < record["start_alone_cost"]
     assert record["used"]
     lines = run_mod.base_identification_lines({"agree": True, "runs": [], "stop_record": record})
     assert any(line.startswith("Stop record kept") for line in lines)
+
+
+def test_the_identification_sets_a_braking_stop_aside_and_says_why(tmp_path):
+    """``python -m benchmark`` on a 7.5 kW six-step start whose stop is braked by the zero vector:
+    with the stop the fit misses the data, the same check as the diagnosis's sets the stop aside,
+    the start-up alone finds J, and the result says so."""
+    from tests.conftest import identify_folder
+
+    made = make_dataset(make_spec("simulink_7k5", "six_step", [], seed=1, duration=0.6, stop=2.0))
+    rec = identify_folder(write_dataset(made, tmp_path / "brake"), tmp_path / "run")
+    sr = rec["review"]["second_look"]
+    assert not sr["used"] and sr["ratio"] < 1.0 / STOP_INERTIA_CONFLICT, sr
+    assert sr["J_with_stop"] < 0.2 * made.truth["parameters"]["J"]  # what the result would have been
+    assert any(w.startswith("Stop record set aside") and "the identification uses the start-up alone" in w
+               for w in rec["warnings"]), rec["warnings"]
+    assert "mechanical" not in rec["problem_info"] and set(rec["parameter_names"]) >= {"J", "fv", "fc"}
+    for k in ("Rs", "Ls", "Le", "Rr", "J"):
+        assert abs(rec["rel_error"][k]) < 0.01, (k, rec["rel_error"])

@@ -98,7 +98,7 @@ def test_cli_reports_data_errors_without_traceback(tmp_path):
 
 
 @pytest.mark.parametrize("override, expected", [
-    ("optimizer=no_such_plugin", "Could not find 'optimizer/no_such_plugin'"),
+    ("optimizer=no_such_plugin", "error: optimizer=no_such_plugin: no such option; options: ["),
     ("budget=0", "budget: must be a positive"),
 ])
 def test_cli_reports_config_errors(tmp_path, override, expected):

@@ -16,10 +16,10 @@ from scipy import optimize
 
 from benchmark.core.effects import EffectContext, effect_context, load_effects
 from benchmark.core.uncertainty import misfit_ratio
-from benchmark.problems.timedomain.diagnosis.noise import startup_noise
 from benchmark.problems.timedomain.diagnosis.pipeline import STATUSES, screen
 from benchmark.problems.timedomain.extended import IDX, base_row, simulate_extended_batch
 from benchmark.problems.timedomain.motor import coefficients
+from benchmark.problems.timedomain.noise import startup_noise
 from benchmark.problems.timedomain.protocol import StartupStopTest
 from benchmark.problems.timedomain.simulation import startup_outputs_batch
 from tests.conftest import PAPER_MOTOR, compose_config

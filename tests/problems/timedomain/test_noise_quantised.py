@@ -1,5 +1,5 @@
 """The speed noise of a coarsely quantised tachometer
-(:func:`benchmark.problems.timedomain.diagnosis.noise.startup_noise`).
+(:func:`benchmark.problems.timedomain.noise.startup_noise`).
 
 Independent plant, an effect-free blind draw (``benchmark.blind source=plant seed=3``, set 1): a
 7.5 kW 6-pole motor started direct-on-line from a 220 V / 60 Hz grid, its speed read in steps of
@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-import benchmark.problems.timedomain.diagnosis.noise as noise
+import benchmark.problems.timedomain.noise as noise
 from benchmark.problems.timedomain.conditioning import condition_dataset
 from benchmark.problems.timedomain.data import load_startup_dataset
 from synthetic.independent import draw_blind_set, make_dataset, write_dataset

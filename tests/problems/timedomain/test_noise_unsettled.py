@@ -1,5 +1,5 @@
 """The noise estimate of a record that ends before its steady state
-(:func:`benchmark.problems.timedomain.diagnosis.noise.startup_noise`).
+(:func:`benchmark.problems.timedomain.noise.startup_noise`).
 
 Independent plant (``synthetic.independent``): a 1 kW grid-fed start with a load machine of 1.3
 times the motor's inertia on a flexible coupling, recorded for 1 s, which ends while the speed
@@ -17,7 +17,7 @@ import copy
 import numpy as np
 import pytest
 
-import benchmark.problems.timedomain.diagnosis.noise as noise
+import benchmark.problems.timedomain.noise as noise
 from benchmark.problems.timedomain.conditioning import condition_dataset
 from benchmark.problems.timedomain.data import load_startup_dataset
 from synthetic.independent import make_dataset, make_spec, write_dataset

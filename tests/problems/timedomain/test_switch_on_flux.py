@@ -79,8 +79,9 @@ def test_chord_voltage_records_are_not_restored(tmp_path):
     the same samples declared continuous get the second difference / 12 subtracted."""
     t = np.arange(2400) / 12e3
     va, vb = 300 * np.cos(2 * np.pi * 50 * t), 300 * np.sin(2 * np.pi * 50 * t)
-    rec = StartupRecord(t=t, v_alpha=va, v_beta=vb, i_alpha=np.sin(2 * np.pi * 50 * t - 1),
-                        i_beta=-np.cos(2 * np.pi * 50 * t - 1), speed=np.full_like(t, 300.0))
+    # the current lags the voltage by 1 rad (57 degrees), as a motor's does
+    rec = StartupRecord(t=t, v_alpha=va, v_beta=vb, i_alpha=np.cos(2 * np.pi * 50 * t - 1),
+                        i_beta=np.sin(2 * np.pi * 50 * t - 1), speed=np.full_like(t, 300.0))
     for chord in (True, False):
         folder = tmp_path / f"chord_{chord}"
         write_startup_dataset(folder, StartupDataset(pole_pairs=1, sample_time=1 / 12e3, startups=[rec],

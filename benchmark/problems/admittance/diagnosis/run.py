@@ -32,6 +32,13 @@ def run_diagnosis(run, data: AdmittanceData, outdir, identify=None, progress=Non
     from benchmark.core.effects import load_effects
     from benchmark.core.io import write_text_atomic
 
+    if data.loadtest is not None:
+        from benchmark.core.errors import ConfigError
+
+        raise ConfigError(f"data.path: {data.source} is a motor test report (kind: loadtest); the steady-state "
+                          "diagnosis reads slip sweeps (kind: admittance) only. Identify the report with "
+                          "python -m benchmark problem=admittance data.path=...; its warnings say what the data "
+                          "cannot fix")
     outdir = Path(outdir)
     candidates = run.get("candidates")
     effects = load_effects("admittance", list(candidates) if candidates else None)

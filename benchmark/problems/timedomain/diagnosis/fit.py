@@ -14,7 +14,6 @@ batched through the kernel), in coordinates normalised to their bounds.
 
 from __future__ import annotations
 
-import math
 import warnings
 from dataclasses import dataclass
 
@@ -25,10 +24,10 @@ from benchmark.core.effects import Effect, EffectContext
 from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.core.uncertainty import hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.diagnosis.noise import startup_noise, stop_noise
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
+from benchmark.problems.timedomain.noise import record_noise, stop_noise
 from benchmark.problems.timedomain.simulation import hold_is_linear
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
@@ -36,14 +35,6 @@ DIVERGED = 1e6
 #: Supply periods at the start of the record whose fold blocks are half a period long (see
 #: :meth:`DiagnosisData.folds`).
 SHORT_BLOCK_PERIODS = 4
-
-
-def supply_frequency_of(t, v_alpha, v_beta) -> float:
-    """Supply frequency (Hz) from the voltage phasor's phase over the last fifth of the record."""
-    n = len(t)
-    tail = slice(int(0.8 * n), n)
-    phase = np.unwrap(np.angle((v_alpha + 1j * v_beta)[tail]))
-    return abs(float(np.polyfit(t[tail], phase, 1)[0])) / (2 * math.pi)
 
 
 @dataclass
@@ -71,11 +62,8 @@ class DiagnosisData:
     def from_dataset(cls, ds: StartupDataset) -> DiagnosisData:
         r = ds.startups[0]
         speed = np.asarray(r.speed, float)
-        has_speed = bool(np.all(np.isfinite(speed)))
         meas = np.stack([r.i_alpha, r.i_beta, speed])
-        f_supply = ds.supply_frequency or supply_frequency_of(r.t, r.v_alpha, r.v_beta)
-        noise = startup_noise(r.t, r.v_alpha, r.v_beta, r.i_alpha, r.i_beta, speed if has_speed else None,
-                              float(f_supply), frequency_known=bool(ds.supply_frequency))
+        noise, f_supply = record_noise(r, ds.supply_frequency)
         stop_t = stop_speed = w0 = None
         if ds.stops:
             st = ds.stops[0]

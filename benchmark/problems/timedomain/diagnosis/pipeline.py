@@ -5,7 +5,8 @@
    friction) from the stop record; without one, ``fv`` and ``fc`` are searched.
    ``diagnosis.base_case=1`` drops Coulomb friction from the base (``coulomb_friction`` is
    then a candidate).
-2. Noise of every channel from the data, with its own uncertainty (:mod:`.noise`).
+2. Noise of every channel from the data, with its own uncertainty
+   (:mod:`benchmark.problems.timedomain.noise`, the one estimate the identification uses too).
 3. Refit the base jointly (start-up currents and speed, free-motion stop), each channel
    divided by its noise, on two interleaved folds of blocks; the held-out residual (each
    fold predicted by the fit on the other) is the gap.
@@ -65,8 +66,8 @@ from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
-from benchmark.problems.timedomain.diagnosis.noise import combined
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
+from benchmark.problems.timedomain.noise import combined
 
 __all__ = ["STATUSES", "DiagnosisSettings", "SetFit", "base_context", "diagnose", "estimated_rated_torque",
            "friction_scale", "held_by_base", "localise", "pullout_torque", "rated_torque", "screen", "verdict_of"]

@@ -16,16 +16,16 @@ import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-import numpy as np
-
 from benchmark.core.effects import load_effects
 from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
 from benchmark.core.nuisance import refine_nuisance
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, diagnose
+from benchmark.problems.timedomain.motor import PARAMETER_UNITS
 from benchmark.problems.timedomain.problem import problem_from_dataset
 from benchmark.problems.timedomain.settings import TimeDomainSettings
+from benchmark.problems.timedomain.stop_record import stop_record_check, stop_record_lines
 
 
 def diagnosis_settings(run: Mapping) -> DiagnosisSettings:
@@ -43,9 +43,6 @@ def diagnosis_settings(run: Mapping) -> DiagnosisSettings:
 
 #: The base identification runs from these seeds (offsets to the run's seed); the lower cost is kept.
 BASE_SEED_OFFSETS = (0, 1)
-#: A stop record whose free-coast constants give a J more than this factor away from the
-#: start-up's own J (fitted without the stop record) is set aside (:func:`stop_record_check`).
-STOP_INERTIA_CONFLICT = 2.0
 
 
 def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base_case: int,
@@ -59,7 +56,10 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     the default pipeline ended with two local starts agreeing on J a ninth of the motor's at
     8 times the cost. Returns the parameters, the data set with the nuisance applied (the one
     the diagnosis's models are fitted to) and what the runs ended at."""
-    settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None)
+    # the base keeps Rs free unless the run asks for a prior (problem.stator_resistance=prior)
+    rs_mode = "free" if problem_settings.stator_resistance == "auto" else problem_settings.stator_resistance
+    settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None,
+                                   stator_resistance=rs_mode)
     problem = problem_from_dataset(settings, ds, truth=None)
     runs = []
     for offset in BASE_SEED_OFFSETS:
@@ -83,47 +83,6 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     if int(base_case) == 1:
         est["fc"] = 0.0
     return est, problem.dataset_with_nuisance(), record
-
-
-def stop_record_check(settings: TimeDomainSettings, ds: StartupDataset | None, problem, ident,
-                      identify: Callable, seed: int) -> tuple[dict, object, object] | None:
-    """Whether the stop record is a free coast of the machine the start-up shows: the start-up
-    fitted alone (``fv`` and ``fc`` searched, one seed) must find a J within a factor
-    :data:`STOP_INERTIA_CONFLICT` of the J of the fit that takes ``tau_m`` and ``fc/J`` from the
-    stop record; else, when the start-up alone is also fitted better by the start-up-alone
-    parameters than by those found with the stop, the stop record is set aside (``used`` False,
-    and the start-up-alone fit becomes the base). A start-up-alone search that stopped in a
-    worse basin (blind plant seed 18, set 3: J 0.16 of the truth, the stop's J right) keeps the
-    stop. Returns the record of the check, the start-up-alone problem and its identification;
-    None when there is no stop record or J is not searched.
-
-    An inverter that holds its zero vector after the start short-circuits the stator: the
-    trapped flux brakes the rotor to rest within a few rotor time constants, and the free-stop
-    fit takes that for a mechanical time constant of 14 ms. On 114 blind stop records (independent
-    plant, own plant, motulator) the two J agreed within 0.76-1.64 on every free coast, loaded or
-    not (the start-up alone was the closer to the truth at both ends); on five independent-plant
-    7.5 kW six-step starts followed by a zero vector they differed 6-19 fold (J with the stop
-    0.05-0.16 of the truth, the start-up alone 0.96-1.00), and three of those five had been
-    diagnosed `unexplained` at 47-99 times the noise. A later draw flagged a sixth such start,
-    with a fan load at 56 % of rated torque (ratio 0.34, J with the stop 0.33 of the truth)."""
-    if ds is None or not ds.stops or ds.inertia is not None or settings.known_inertia is not None:
-        return None
-    alone = problem_from_dataset(settings, dataclasses.replace(ds, stops=[]), truth=None)
-    ident_alone = identify(alone, seed=seed)
-    if ident_alone.x is None:
-        return None
-    with_stop = problem.estimate(ident.x)
-    j_stop, j_alone = float(with_stop["J"]), float(alone.estimate(ident_alone.x)["J"])
-    ratio = j_stop / j_alone if j_alone > 0 else math.inf
-    # the start-up's own cost at the parameters found with the stop: a start-up-alone search that
-    # stopped in a worse basin than those parameters is no evidence against the stop record
-    x_with_stop = np.array([[with_stop[n] for n in alone.parameter_names]])
-    cost_with_stop = float(alone.evaluate(x_with_stop)[0])
-    cost_alone = float(alone.evaluate(np.atleast_2d(ident_alone.x))[0])
-    conflict = not 1.0 / STOP_INERTIA_CONFLICT <= ratio <= STOP_INERTIA_CONFLICT
-    used = bool(not conflict or cost_with_stop <= cost_alone)
-    return ({"used": used, "conflict": conflict, "J_with_stop": j_stop, "J_start_alone": j_alone, "ratio": ratio,
-             "start_alone_cost": cost_alone, "start_cost_at_stop_fit": cost_with_stop}, alone, ident_alone)
 
 
 def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify: Callable,
@@ -165,20 +124,7 @@ def base_identification_lines(bi: dict | None) -> list[str]:
         lines.append(f"Base identification: the runs from different seeds ended apart ({costs}); the lowest "
                      f"(seed {bi['kept_seed']}) is used. The others stopped in another basin: the landscape "
                      "is hard, and a run with one seed alone may land there.")
-    sr = (bi or {}).get("stop_record")
-    if sr and not sr["used"]:
-        lines.append(f"Stop record set aside: with it the base finds J = {sr['J_with_stop']:.4g} kg m^2, from the "
-                     f"start-up alone J = {sr['J_start_alone']:.4g} kg m^2 ({sr['ratio']:.3g} times; more than "
-                     f"{STOP_INERTIA_CONFLICT:g} apart). The stop record is no free coast of this machine (an "
-                     "inverter holding a zero vector brakes it, or a brake, or another load): the diagnosis uses "
-                     "the start-up alone, with fv and fc searched.")
-    elif sr and sr.get("conflict"):
-        lines.append(f"Stop record kept: the start-up alone found J = {sr['J_start_alone']:.4g} kg m^2 against "
-                     f"{sr['J_with_stop']:.4g} with the stop ({sr['ratio']:.3g} times), but it fits the start-up "
-                     f"worse than the parameters found with the stop do (cost {sr['start_alone_cost']:.6g} "
-                     f"against {sr['start_cost_at_stop_fit']:.6g}): that search stopped in another "
-                     "basin.")
-    return lines
+    return lines + stop_record_lines((bi or {}).get("stop_record"))
 
 
 def render_markdown(doc: dict) -> str:
@@ -198,6 +144,16 @@ def render_markdown(doc: dict) -> str:
         for pe in doc["per_effect"]:
             par = ", ".join(f"{k} = {v['value']:.4g} +- {v['standard_error']:.2g}" for k, v in pe["parameters"].items())
             lines.append(f"| {pe['effect']} | {100 * pe['drop_one_share']:.0f} % | {par} |")
+        lines.append("")
+    base = doc.get("base") or {}
+    if base.get("estimate"):
+        se, first = base.get("standard_errors") or {}, base.get("identification") or {}
+        lines += ["| base model parameter | unit | in the final model (+- standard error) | identified alone |",
+                  "|---|---|---|---|"]
+        for k, v in base["estimate"].items():
+            value = f"{v:.5g}" + (f" +- {se[k]:.2g}" if se.get(k) is not None else "")
+            alone = f"{first[k]:.5g}" if k in first else "-"
+            lines.append(f"| {k} | {PARAMETER_UNITS.get(k, '-')} | {value} | {alone} |")
         lines.append("")
     for group in doc["indistinguishable"]:
         lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")

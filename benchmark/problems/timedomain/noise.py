@@ -1,4 +1,9 @@
-"""Noise level of each measured channel, with its own uncertainty, that holds for coloured noise.
+"""The noise of a start-up record: each measured channel's level, with its own uncertainty, that
+holds for coloured and quantised noise. This is the one noise estimate of the time-domain
+problem: the identification's fit quality (:meth:`benchmark.problems.timedomain.problem.
+TimeDomainProblem.channel_noise`, judged by :func:`benchmark.core.uncertainty.misfit_ratio`) and
+the diagnosis (:mod:`benchmark.problems.timedomain.diagnosis.fit`) both call
+:func:`startup_noise`; change it here and both change.
 
 Where the record has a pre-trigger (samples before the supply is switched on: voltage and
 current at rest), every channel's noise is the spread of that quiet segment
@@ -13,11 +18,16 @@ current at rest), every channel's noise is the spread of that quiet segment
   the quadratic fit's residual holds the signal (five times the noise on an independent-plant
   start of a motor with a coupled load): there the envelopes are piecewise linear with a knot
   every two periods, with at least a 20 % relative uncertainty;
-* speed: a Savitzky-Golay fit over the steady state (:func:`noise_from_smooth`);
-* stop record: the same smooth fit over the free motion.
+* speed: over the steady state, the smaller of a Savitzky-Golay fit's residual
+  (:func:`noise_from_smooth`) and the same drifting-harmonics fit as the currents (see
+  :func:`steady_speed_noise`: each leaves some signal in, in different records);
+* stop record: a smooth fit over the free motion.
 
 Segments too short for these fall back to a fourth-difference estimate (white noise only),
-with a 20 % relative uncertainty. A quantised channel's noise is at least ``q / sqrt(12)``.
+with a 20 % relative uncertainty. A quantised channel's noise is at least ``q / sqrt(12)``,
+``q`` the grid step found on the whole channel (:func:`quantum`), and a noise-free channel's
+is 1e-4 of its peak for a current, 1e-5 for a speed (:data:`NOISE_FREE_FLOOR`,
+:data:`SPEED_NOISE_FREE_FLOOR`).
 """
 
 from __future__ import annotations
@@ -36,11 +46,18 @@ from benchmark.core.noise_estimates import (
     noise_from_smooth,
     refine_frequency,
 )
+from benchmark.problems.timedomain.frames import phasor_speed
 
 #: Fallback relative uncertainty of the fourth-difference estimate.
 FALLBACK_REL_UNCERTAINTY = 0.2
 #: A pre-trigger needs at least this many samples.
 MIN_QUIET = 48
+#: The noise of a current is at least this share of its peak (a noise-free synthetic record:
+#: a 14-bit converter's resolution; below it no record is measured).
+NOISE_FREE_FLOOR = 1e-4
+#: ... and a speed's at least this share of its peak: an encoder or tachometer resolves finer (the
+#: independent plant's 0.02 rad/s on a 3000 rpm motor is 6e-5 of it, which 1e-4 raised by a quarter).
+SPEED_NOISE_FREE_FLOOR = 1e-5
 
 
 def fourth_difference(x: np.ndarray) -> float:
@@ -63,7 +80,22 @@ def quantum(x: np.ndarray) -> float:
     return q if np.mean(on_grid) > 0.99 else 0.0
 
 
-def _floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
+def quantisation_cells(x: np.ndarray, q: float) -> float:
+    """Effective number of independent quantisation errors in ``x`` (a channel on a grid of step
+    ``q``): the record cut into stretches that stay within one step of their first value (a
+    signal that sits still, or flickers between two levels, keeps one error for the whole
+    stretch), ``1 / sum w_j^2`` with ``w_j`` each stretch's share of the samples."""
+    x = np.asarray(x, float)
+    starts, ref = [0], x[0]
+    for k in np.flatnonzero(np.abs(np.diff(x)) > 0) + 1:  # only where the value changes
+        if abs(x[k] - ref) > 1.5 * q:
+            starts.append(int(k))
+            ref = x[k]
+    w = np.diff(np.append(starts, len(x))) / len(x)
+    return float(1.0 / np.sum(w**2))
+
+
+def floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
     """``est`` raised to ``floor`` and to the quantisation noise ``q / sqrt(12)`` of the whole
     channel ``x``: the grid is found on the whole record, not on the stretch the noise came
     from. A coarse speed step with little dither sits on one or two levels at standstill and at
@@ -71,17 +103,28 @@ def _floored(est: NoiseEstimate, x: np.ndarray, floor: float) -> NoiseEstimate:
     leaves its full quantisation error in the residual (independent plant, a 0.186 rad/s step
     with 0.016 rad/s of white noise: the steady state gave only the 1e-4 floor, 0.013 rad/s,
     the run-up's residual holds q/sqrt(12) = 0.054, and an effect-free start was called
-    ``unexplained``)."""
+    ``unexplained``).
+
+    Where the quantisation sets the level, ``q / sqrt(12)`` is the RMS of a uniform error only
+    over many independent errors; a signal that sits still keeps one error, anywhere within
+    ``+-q/2``, for as long as it sits (a steady state: up to ``sqrt(3)`` times ``q / sqrt(12)``).
+    So the level's relative uncertainty is ``1 / sqrt(5 n)``, ``n`` the
+    :func:`quantisation_cells` (the spread of the RMS of ``n`` uniform errors; the paper motor's
+    start with a 0.5 rad/s step and no other noise: n = 3.2, 25 %, where the exact model's
+    residual is 1.15 times ``q / sqrt(12)``)."""
     q = quantum(x)
     std = max(est.std, q / math.sqrt(12.0), floor)
     if std == est.std:
         return est
+    if std == q / math.sqrt(12.0):
+        u = math.hypot(est.rel_uncertainty, 1.0 / math.sqrt(5.0 * quantisation_cells(x, q)))
+        return NoiseEstimate(std, u, est.n_effective, est.method + f" (floored: quantisation step {q:.3g})")
     return NoiseEstimate(std, est.rel_uncertainty, est.n_effective, est.method + " (floored)")
 
 
 def fallback(x: np.ndarray, floor: float, why: str) -> NoiseEstimate:
     n = max(len(x) - 4, 1)
-    return _floored(NoiseEstimate(fourth_difference(x), FALLBACK_REL_UNCERTAINTY, float(n),
+    return floored(NoiseEstimate(fourth_difference(x), FALLBACK_REL_UNCERTAINTY, float(n),
                                   f"fourth differences ({why})"), x, floor)
 
 
@@ -218,13 +261,32 @@ def settled(speed: np.ndarray | None, n: int, k_ss: int, fs: float, f0: float) -
     return bool(k_ss < n - period and not np.any(_departures(speed, n, period) >= k_ss))
 
 
+def supply_frequency_of(t, v_alpha, v_beta) -> float:
+    """Supply frequency (Hz) from the voltage phasor's phase over the last fifth of the record."""
+    tail = slice(int(0.8 * len(t)), len(t))
+    return abs(phasor_speed(np.asarray(v_alpha)[tail], np.asarray(v_beta)[tail], np.asarray(t)[tail])) / (2 * math.pi)
+
+
+def record_noise(record, supply_frequency: float | None = None) -> tuple[dict[str, NoiseEstimate], float]:
+    """:func:`startup_noise` of a :class:`~benchmark.problems.timedomain.data.StartupRecord`
+    (``speed`` left out when not measured) and the supply frequency it used (Hz): the one given
+    (meta.yaml's ``supply_frequency``), else :func:`supply_frequency_of` the voltages."""
+    r = record
+    speed = np.asarray(r.speed, float)
+    has_speed = bool(np.all(np.isfinite(speed)))
+    f_supply = float(supply_frequency or supply_frequency_of(r.t, r.v_alpha, r.v_beta))
+    noise = startup_noise(r.t, r.v_alpha, r.v_beta, r.i_alpha, r.i_beta, speed if has_speed else None, f_supply,
+                          frequency_known=bool(supply_frequency))
+    return noise, f_supply
+
+
 def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: float,
                   frequency_known: bool = False) -> dict[str, NoiseEstimate]:
     """Noise of ``i_alpha``, ``i_beta`` and (when measured) ``speed`` of one start-up record."""
     n = len(t)
     fs = 1.0 / float(np.median(np.diff(t)))
     has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
-    i_floor = 1e-4 * float(np.max(np.abs(np.concatenate([i_alpha, i_beta]))))
+    i_floor = NOISE_FREE_FLOOR * float(np.max(np.abs(np.concatenate([i_alpha, i_beta]))))
     out: dict[str, NoiseEstimate] = {}
     k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
     chans = {"i_alpha": i_alpha, "i_beta": i_beta}
@@ -232,9 +294,9 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
         chans["speed"] = speed
     if k_quiet >= MIN_QUIET:
         for ch, x in chans.items():
-            floor = i_floor if ch != "speed" else 1e-4 * float(np.max(np.abs(speed)))
+            floor = i_floor if ch != "speed" else SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
             try:
-                out[ch] = _floored(noise_from_quiet(x[:k_quiet]), x, floor)
+                out[ch] = floored(noise_from_quiet(x[:k_quiet]), x, floor)
             except ValueError:
                 out[ch] = fallback(x, floor, "pre-trigger too short")
         return out
@@ -257,57 +319,46 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
                     est = NoiseEstimate(local.std, max(local.rel_uncertainty, UNSETTLED_REL_UNCERTAINTY),
                                         local.n_effective,
                                         local.method + "; the record ends before a steady state")
-            out[ch] = _floored(est, chans[ch], i_floor)
+            out[ch] = floored(est, chans[ch], i_floor)
         except (ValueError, np.linalg.LinAlgError) as exc:
             out[ch] = fallback(chans[ch], i_floor, str(exc))
     if has_speed:
-        x = speed[k_ss:]
-        floor = 1e-4 * float(np.max(np.abs(speed)))
-        window = int(min(101, len(x) // 3)) | 1
+        floor = SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
         try:
-            out["speed"] = _floored(noise_from_smooth(x, window), speed, floor)
+            out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0), speed, floor)
         except ValueError as exc:
             out["speed"] = fallback(speed, floor, str(exc))
     return out
 
 
-def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
-                  supply_frequency: float) -> tuple[dict[str, NoiseEstimate], dict[str, np.ndarray]]:
-    """Noise of measured continuous voltages ``v_alpha``, ``v_beta`` (V), found as the currents'
-    is: the pre-trigger's spread where there is one, else what the drifting-harmonics fit of the
-    steady state leaves (the grid's harmonics, unbalance and slow dips are signal, not noise).
-    Also returns that noise itself (the quiet segment less its mean, or the fit's residual),
-    whose spectrum, not only its spread, decides what it does to the model (empty when the
-    fourth-difference fallback was used)."""
-    n = len(t)
-    fs = 1.0 / float(np.median(np.diff(t)))
-    v_floor = 1e-5 * float(np.max(np.hypot(v_alpha, v_beta)))
-    chans = {"v_alpha": np.asarray(v_alpha, float), "v_beta": np.asarray(v_beta, float)}
-    k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
-    out: dict[str, NoiseEstimate] = {}
-    templates: dict[str, np.ndarray] = {}
-    has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
-    k_ss = steady_start(speed if has_speed else None, n, max(int(fs / supply_frequency), 1))
-    for ch, x in chans.items():
+def steady_speed_noise(x: np.ndarray, fs: float, f0: float) -> NoiseEstimate:
+    """Noise of the speed's steady state ``x`` (rad/s): the smaller of a Savitzky-Golay fit's
+    residual (window up to 101 samples) and, over two supply periods or more, the drifting
+    harmonics of the supply ``f0`` (Hz) fitted as for the currents. An inverter's torque ripple
+    (six times the supply frequency) is faster than the smoothing window and stays in its
+    residual (independent plant, six-step starts of 1 and 2.2 kW motors: 2.7 and 3.5 times the
+    noise really added), the harmonic fit takes it out (1.00-1.01); a PWM inverter's ripple is
+    no supply harmonic and the harmonic fit leaves it in (1.37-1.41), the smoothing takes it out
+    (1.03-1.04). Both came within 5 % of it on direct-on-line starts."""
+    window = int(min(101, len(x) // 3)) | 1
+    est = noise_from_smooth(x, window)
+    if len(x) / fs * f0 >= 2:
         try:
-            if k_quiet >= MIN_QUIET:
-                out[ch] = _floored(noise_from_quiet(x[:k_quiet]), x[:k_quiet], v_floor)
-                templates[ch] = x[:k_quiet] - np.mean(x[:k_quiet])
-                continue
-            if (n - k_ss) / fs * supply_frequency < 2:
-                raise ValueError("steady state shorter than two periods")
-            est, templates[ch] = modulated_periodic_noise(x[k_ss:], fs, supply_frequency)
-            out[ch] = _floored(est, x[k_ss:], v_floor)
-        except (ValueError, np.linalg.LinAlgError) as exc:
-            out[ch] = fallback(x, v_floor, str(exc))
-    return out, templates
+            periodic = noise_from_modulated_periodic(x, fs, f0)
+        except (ValueError, np.linalg.LinAlgError):
+            return est
+        if periodic.std < est.std:
+            return periodic
+    return est
 
 
 def stop_noise(speed: np.ndarray, w0: float) -> NoiseEstimate:
-    floor = 1e-4 * max(w0, 1e-9)
+    """Noise of a stop record's free motion ``speed`` (rad/s, from the speed ``w0``): a smooth
+    fit's residual, floored as the start-up's channels."""
+    floor = SPEED_NOISE_FREE_FLOOR * max(w0, 1e-9)
     window = int(min(51, len(speed) // 3)) | 1
     try:
-        return _floored(noise_from_smooth(speed, window), speed, floor)
+        return floored(noise_from_smooth(speed, window), speed, floor)
     except ValueError as exc:
         return fallback(speed, floor, str(exc))
 

@@ -1,0 +1,1 @@
+"""Private helpers of :mod:`benchmark.api` (the data set, overrides, results, export)."""

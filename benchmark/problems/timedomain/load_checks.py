@@ -1,0 +1,184 @@
+"""Checks on load of a start-up record for mistakes that still produce a result: wiring (phase
+labels swapped or rotated between the voltage and the current channels), units (a current or a
+speed scale the nameplate contradicts, an inertia the rated power contradicts) and the input
+hold (inverter levels read as a continuous voltage). Each says what is wrong and how to fix it
+in one line: an error (:class:`~benchmark.core.errors.DataError`, exit status 2) where the data
+cannot be right, a warning (:class:`~benchmark.core.errors.DataWarning`) where they only look
+wrong. Run on the records as read, before the conditioning (:func:`check_records`).
+
+The fundamental of a channel is its phasor demodulated at the supply frequency over the record's
+last fifth (a start-up ends near its steady state); the supply frequency is the voltage phasor's
+rotation there.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from benchmark.core.errors import DataError, DataWarning
+from benchmark.problems.timedomain.frames import fundamental, phasor_speed
+
+#: A motor's current lags its voltage by 0-90 degrees; a phase angle outside this window (deg)
+#: is no motor's: labels rotated by 120 degrees move it by 120.
+PHASE_ANGLE_WINDOW = (-30.0, 120.0)
+#: Steady-state current over the nameplate's rated current: a motor near no load draws 0.1-1
+#: times it; outside this range it looks wrong (a warning) ...
+CURRENT_RATIO_PLAUSIBLE = (0.05, 2.0)
+#: ... and outside this one it cannot be right (an error: mA for A, kA for A).
+CURRENT_RATIO_POSSIBLE = (0.005, 20.0)
+#: Final speed over the nameplate speed: plausible (a loaded start ends lower) and possible.
+SPEED_RATIO_PLAUSIBLE = (0.5, 1.3)
+SPEED_RATIO_POSSIBLE = (0.15, 4.0)
+#: Typical rotor inertia of a motor of rated power P: ``J_TYPICAL * (P / 1 kW)^J_EXPONENT`` kg m^2
+#: (the zoo's 26 published motors, 1-150 kW, lie within a factor 7 of it) ...
+J_TYPICAL, J_EXPONENT = 0.005, 1.25
+#: ... and the energy bound on J (``2 E_in / w^2``: losses and a coupled load included) is
+#: suspect beyond this factor of it either way.
+J_RATIO_PLAUSIBLE = 1000.0
+#: An inverter's voltage holds its level: at least this share of samples repeat the one before.
+HELD_SHARE = 0.5
+#: ... on at most this many distinct levels per channel.
+INVERTER_LEVELS = 64
+
+
+def _tail(rec) -> slice:
+    n = len(rec.t)
+    return slice(int(0.8 * n), n)
+
+
+def electrical_speed(rec) -> float:
+    """Signed rotation speed (rad/s) of the voltage phasor over the record's last fifth."""
+    tail = _tail(rec)
+    return phasor_speed(rec.v_alpha[tail], rec.v_beta[tail], rec.t[tail])
+
+
+def _columns(rec, kind: str) -> str:
+    cols = getattr(rec, "columns", None) or {}
+    return cols.get(kind, "v_alpha, v_beta" if kind == "voltage" else "i_alpha, i_beta")
+
+
+def check_phase_sequence(rec) -> None:
+    """Voltage and current phasors must turn the same way and the current lag the voltage by a
+    motor's angle; a DataError says which labels to change."""
+    tail = _tail(rec)
+    t = rec.t[tail]
+    v = rec.v_alpha[tail] + 1j * rec.v_beta[tail]
+    i = rec.i_alpha[tail] + 1j * rec.i_beta[tail]
+    w_e = electrical_speed(rec)
+    if not abs(w_e) > 0 or not np.any(np.abs(i) > 0):
+        return
+    fwd, bwd = abs(fundamental(i, t, abs(w_e))), abs(fundamental(i, t, -abs(w_e)))
+    i_sign = 1.0 if fwd >= bwd else -1.0
+    if max(fwd, bwd) < 3 * min(fwd, bwd):
+        return  # no clear sequence in the currents (a record that ends stopped): nothing to compare
+    vcols, icols = _columns(rec, "voltage"), _columns(rec, "current")
+    if np.sign(w_e) != i_sign:
+        swap = ("swap the columns v_s and v_t" if "v_r" in vcols else "negate v_beta")
+        raise DataError(rec.source, f"the voltage ({vcols}) and current ({icols}) phase sequences disagree: the "
+                                    f"voltage phasor turns {'forwards' if w_e > 0 else 'backwards'}, the current "
+                                    f"phasor {'forwards' if i_sign > 0 else 'backwards'}, so two phase labels are "
+                                    f"swapped in one of them; {swap} (or the matching current columns)",
+                        column=vcols)
+    S = fundamental(v, t, w_e) * np.conj(fundamental(i, t, w_e))
+    angle = math.degrees(math.atan2(S.imag, S.real)) * np.sign(w_e)  # current lag, deg
+    lo, hi = PHASE_ANGLE_WINDOW
+    if lo <= angle <= hi:
+        return
+    fixed = {k: (angle - 120.0 * k + 180.0) % 360.0 - 180.0 for k in (1, -1)}
+    k = min(fixed, key=lambda k: abs(fixed[k] - 45.0))
+    if "v_r" in vcols:
+        # k = 1: the file's voltage leads the true one by 120 degrees (its v_r column holds phase T)
+        rename = ("rename v_r, v_s, v_t to v_t, v_r, v_s" if k == 1 else "rename v_r, v_s, v_t to v_s, v_t, v_r")
+    else:
+        rename = f"rotate the voltage phasor by {-120 * k:+d} degrees (relabel the phases before the Clarke transform)"
+    raise DataError(rec.source, f"the current lags the voltage by {angle:.0f} degrees, which no motor does (0 to 90): "
+                                f"the voltage and current phase labels are rotated by 120 degrees against each other; "
+                                f"{rename} (then the current lags by {fixed[k]:.0f} degrees)", column=vcols)
+
+
+def settled(rec) -> bool:
+    """Whether the record ends in a steady state: over its last fifth the speed's (or without a
+    speed, the current amplitude's) mean in the first and second halves agree within 2 %. A start
+    that has not finished (a coupled load's inertia) still draws a large current at a low speed."""
+    tail = _tail(rec)
+    x = np.abs(rec.speed[tail]) if rec.has_speed else np.hypot(rec.i_alpha[tail], rec.i_beta[tail])
+    half = len(x) // 2
+    a, b = float(np.mean(x[:half])), float(np.mean(x[half:]))
+    return half > 4 and abs(a - b) <= 0.02 * max(abs(b), 1e-12)
+
+
+def _ratio_check(path, column, what, ratio, plausible, possible, hint, steady: bool) -> None:
+    """An error beyond ``possible`` (its lower end only for a record in its steady state: an
+    unfinished start is slow and draws much current), a warning beyond ``plausible`` (steady only)."""
+    low = possible[0] if steady else 0.0
+    if low <= ratio <= possible[1]:
+        if steady and not plausible[0] <= ratio <= plausible[1]:
+            warnings.warn(DataWarning.at(path, f"{what} is {ratio:.3g} times the nameplate's: {hint}", column=column),
+                          stacklevel=4)
+        return
+    raise DataError(path, f"{what} is {ratio:.3g} times the nameplate's, which cannot be: {hint}", column=column)
+
+
+def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
+    """Current, speed and the energy's inertia against the nameplate (``current`` A rms, ``speed``
+    rpm, ``rated_power`` W): an error where the scale cannot be right (a current in mA), a
+    warning where it only looks wrong."""
+    if not nameplate:
+        return
+    tail = _tail(rec)
+    t = rec.t[tail]
+    w_e = electrical_speed(rec)
+    i = rec.i_alpha[tail] + 1j * rec.i_beta[tail]
+    icols = _columns(rec, "current")
+    steady = settled(rec)
+    if nameplate.get("current") and abs(w_e) > 0:
+        i_rms = abs(fundamental(i, t, w_e)) / math.sqrt(2.0)
+        ratio = i_rms / nameplate["current"]
+        _ratio_check(rec.source, icols, f"the steady-state current {i_rms:.4g} A rms", ratio, CURRENT_RATIO_PLAUSIBLE,
+                     CURRENT_RATIO_POSSIBLE, "are the currents in A (not mA or kA), and the probe's scale right?",
+                     steady)
+    if nameplate.get("speed") and rec.has_speed:
+        final = float(np.mean(rec.speed[tail]))
+        rated = nameplate["speed"] * math.pi / 30.0
+        _ratio_check(rec.source, "speed", f"the final speed {final:.4g} rad/s", abs(final) / rated,
+                     SPEED_RATIO_PLAUSIBLE, SPEED_RATIO_POSSIBLE,
+                     "is the speed in rad/s (or speed_unit: rpm in meta.yaml) and mechanical, not electrical?",
+                     steady)
+    if nameplate.get("rated_power") and rec.has_speed and steady:
+        w_end = float(np.mean(np.abs(rec.speed[tail])))
+        power = 1.5 * (rec.v_alpha * rec.i_alpha + rec.v_beta * rec.i_beta)
+        energy = float(np.sum(power)) * float(np.median(np.diff(rec.t)))
+        if w_end > 0 and energy > 0:
+            j_max = 2.0 * energy / w_end**2
+            j_typ = J_TYPICAL * (nameplate["rated_power"] / 1e3) ** J_EXPONENT
+            if not 1.0 / J_RATIO_PLAUSIBLE <= j_max / j_typ <= J_RATIO_PLAUSIBLE:
+                warnings.warn(DataWarning.at(
+                    rec.source, f"the energy the start-up took bounds the inertia at {j_max:.3g} kg m^2, "
+                                f"{j_max / j_typ:.3g} times a typical {nameplate['rated_power'] / 1e3:.3g} kW motor's "
+                                f"{j_typ:.2g} kg m^2: are the currents ({icols}) and voltages in A and V?",
+                    column=icols), stacklevel=3)
+
+
+def check_input_hold(rec, input_hold: str, meta_path) -> None:
+    """Voltages held at a few levels (an inverter's switch states) while meta.yaml says ``linear``:
+    a warning to set ``input_hold: zoh``."""
+    if input_hold != "linear":
+        return
+    held = min(float(np.mean(np.diff(x) == 0.0)) for x in (rec.v_alpha, rec.v_beta))
+    levels = max(len(np.unique(x)) for x in (rec.v_alpha, rec.v_beta))
+    if held >= HELD_SHARE and levels <= INVERTER_LEVELS:
+        warnings.warn(DataWarning.at(
+            meta_path, f"input_hold is linear, but the voltages of {rec.source} hold {levels} levels for "
+                       f"{100 * held:.0f} % of the samples, as an inverter's switch states do: set input_hold: zoh "
+                       "(the model would otherwise ramp between the levels)", column=None), stacklevel=3)
+
+
+def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold: str, meta_path) -> None:
+    """Every check above on every start-up record."""
+    for rec in startups:
+        check_phase_sequence(rec)
+        check_scales(rec, nameplate, pole_pairs)
+        check_input_hold(rec, input_hold, meta_path)

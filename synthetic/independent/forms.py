@@ -1,0 +1,102 @@
+"""The split of every effect's forms into development and held-out forms, in one place.
+
+*Development* forms are the ones the project's diagnosis was developed and tuned on: every
+form this plant had before the held-out forms were written. *Held-out* forms are second
+physical forms written from the physics afterwards (``docs/effect_forms.md``): they exist to
+score the diagnosis on data it was not developed on. A rule, threshold or prior of the
+diagnosis may be calibrated on development forms only; held-out forms are for the final
+scoring, and their scores are not to be looked at while the diagnosis is being changed.
+
+Form sets (the ``forms`` key of ``python -m benchmark.blind`` and of ``python -m
+synthetic.independent``): ``development`` (the default: the plant's behaviour before the
+split, draw for draw), ``heldout`` and ``all``.
+
+A held-out form may be limited to some scenarios (:data:`SCENARIOS`): a current transformer
+cannot measure the near-DC currents of a V/f ramp from standstill, so it is drawn only for
+the fixed-frequency starts (``dol``, ``six_step``).
+"""
+
+from __future__ import annotations
+
+FORM_SETS = ("development", "heldout", "all")
+
+#: Forms the diagnosis was developed on (the draw order of :meth:`Effect.draw` is this order).
+DEVELOPMENT = {
+    "coulomb_friction": ("coulomb",),
+    "double_cage": ("double_cage", "deep_bar"),
+    "main_saturation": ("frohlich", "arctan", "table"),
+    "iron_loss": ("eddy_winding", "shunt"),
+    "leakage_saturation": ("lorentzian", "frohlich"),
+    "load_torque": ("constant", "quadratic", "step"),
+    "two_mass": ("spring", "backlash"),
+    "temperature_drift": ("one_body", "two_body"),
+    "inverter_drop": ("igbt", "mosfet"),
+    "current_sensor_saturation": ("tanh", "knee", "clip"),
+    "speed_sensor_gain": ("gain", "gain_ripple"),
+    "sensor_offset": ("both", "current", "voltage"),
+    "channel_delay": ("current_lag", "voltage_lag"),
+}
+
+#: Second physical forms, for scoring only (see the module docstring).
+HELDOUT = {
+    "coulomb_friction": ("bearing",),
+    "double_cage": ("tapered_bar",),
+    "main_saturation": ("steel_gap", "langevin"),
+    "iron_loss": ("steinmetz",),
+    "leakage_saturation": ("closed_slot_bridge",),
+    "load_torque": ("dc_generator",),
+    "two_mass": ("elastomer",),
+    "temperature_drift": ("three_body",),
+    "inverter_drop": ("mosfet_capacitive",),
+    "current_sensor_saturation": ("hall_core", "current_transformer"),
+    "speed_sensor_gain": ("tacho_filter",),
+    "sensor_offset": ("thermal_drift",),
+    "channel_delay": ("anti_alias", "mux_skew"),
+}
+
+#: The motulator source (``synthetic/motulator_source.py``) injects three effects; development
+#: forms are motulator's own models, held-out forms are in ``synthetic/motulator_effects.py``.
+#: It has no form (and injects nothing) for the other effects.
+MOTULATOR_DEVELOPMENT = {
+    "main_saturation": ("power_law",),
+    "two_mass": ("spring",),
+    "load_torque": ("step", "constant", "quadratic"),
+}
+MOTULATOR_HELDOUT = {
+    "main_saturation": ("steel_gap",),
+    "two_mass": ("elastomer",),
+    "load_torque": ("dc_generator",),
+}
+
+#: Held-out forms drawn only for some scenario kinds (all others: every scenario).
+SCENARIOS = {"current_transformer": ("dol", "six_step")}
+
+
+def motulator_forms_of(name: str, which: str = "development") -> tuple[str, ...]:
+    """The motulator source's forms of effect ``name`` in form set ``which``."""
+    dev, held = MOTULATOR_DEVELOPMENT[name], MOTULATOR_HELDOUT[name]
+    return {"development": dev, "heldout": held, "all": dev + held}[check_form_set(which)]
+
+
+def check_form_set(which: str) -> str:
+    if which not in FORM_SETS:
+        raise ValueError(f"forms must be one of {FORM_SETS}, got {which!r}")
+    return which
+
+
+def all_forms(name: str) -> tuple[str, ...]:
+    """Every form of effect ``name``: development first, then held-out."""
+    return DEVELOPMENT[name] + HELDOUT[name]
+
+
+def forms_of(name: str, which: str = "development", scenario: str | None = None) -> tuple[str, ...]:
+    """The forms of effect ``name`` in form set ``which`` that may occur in a ``scenario``
+    kind (None: any)."""
+    pool = {"development": DEVELOPMENT[name], "heldout": HELDOUT[name],
+            "all": all_forms(name)}[check_form_set(which)]
+    return tuple(f for f in pool if scenario is None or scenario in SCENARIOS.get(f, (scenario,)))
+
+
+def form_set_of(name: str, form: str) -> str:
+    """``development`` or ``heldout``: which set form ``form`` of effect ``name`` is in."""
+    return "development" if form in DEVELOPMENT[name] else "heldout"
