@@ -31,9 +31,10 @@ from pathlib import Path
 
 import yaml
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.errors import ConfigError
 
-CONF = Path(__file__).resolve().parents[3] / "conf"
+CONF = CONFIG_DIR
 TIMEDOMAIN_KEYS = ("motors", "source", "experiment", "stop", "noise", "effect")
 ADMITTANCE_KEYS = ("motors", "sweep", "model", "data_model", "noise")
 
