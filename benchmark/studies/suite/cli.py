@@ -189,7 +189,8 @@ def main(argv: list[str]) -> int:
             raise ConfigError(f"no runs under {runs}: run the suite first (stage=runs)")
         figures = write_figures(results, out, list(suite.optimizers) + list(
             {o for v in suite.problem_optimizers.values() for o in v}))
-        write_report(results, fstars, out, figures, {"suite": suite.name, "command": log["command"]})
+        write_report(results, fstars, out, figures, {"suite": suite.name, "command": log["command"]},
+                     defaults=("multistart", *suite.variants))
     return _done(log, cache, f"{len(results)} instances -> {out / 'summary.md'}", out)
 
 

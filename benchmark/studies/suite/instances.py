@@ -20,8 +20,8 @@ Lindsay and Barton's machine) and, for an 8-parameter machine, their machine's r
 phase voltage (their 30.2 V of 127 V) in steps of 1/18 of synchronous speed; windings warming
 by their thermal model scaled with the rated power. Bounds: the problem's own derivation from
 the data (model A's reading of the synchronous and standstill admittances, a factor 4 either
-side), widened by a further factor 2.5 (the admittance problem gets its own bounds from data on
-the ``steady`` branch; the suite switches to them once merged).
+side), widened by a further factor 2.5, recorded in ``instance.yaml`` (a box that wide around
+the answer, so the global optimisers have something to search).
 
 ``instance.yaml`` beside the data records the instance: its spec, data seed, group labels and
 (admittance) bounds.

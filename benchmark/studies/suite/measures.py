@@ -225,7 +225,7 @@ def best_precision(ir: InstanceResult, label: str) -> float:
 
 def default_check(results, label: str = "multistart") -> dict:
     """How the default pipeline did: runs and instances at f*, the misses (with whether their
-    message warns), and how often a ``converged`` claim (confirmed minimum) sat above f*."""
+    message or the result's warnings warn), and how often a ``converged`` claim (confirmed minimum) sat above f*."""
     runs = [(ir, r) for ir in results.values() for r in ir.runs if r.label == label]
     if not runs:
         return {}
@@ -239,5 +239,6 @@ def default_check(results, label: str = "multistart") -> dict:
             "instances": len(inst), "instances_all_seeds": sum(all(v) for v in inst.values()),
             "converged_claims": len(claims), "converged_above_fstar": len(wrong),
             "misses": [{"instance": ir.name, "seed": r.seed, "precision": ir.precision(r.cost),
-                        "warned": not r.message.startswith("converged"), "message": r.message[:240]}
+                        "warned": not r.message.startswith("converged") or bool(r.run.rec.get("warnings")),
+                        "message": r.message[:240]}
                        for ir, r in misses]}
