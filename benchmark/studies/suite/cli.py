@@ -13,7 +13,7 @@ Arguments (``key=value``):
 ``launcher``  ``joblib`` (default: ``imbench_joblib`` with ``jobs`` workers), ``slurm``
               (``imbench_slurm``; give ``hydra.launcher.partition=NAME``), ``submitit_local``
 ``jobs``      joblib workers (default 2); ``chunk``: runs per sweep (default 1000)
-``only``      a glob of instance names; ``sample``: instances the ``cost`` stage measures (12)
+``only``      globs of instance names, comma-separated; ``sample``: instances the ``cost`` stage measures (12)
 ``hydra.*``   passed to every sweep (``hydra.launcher.partition=NAME``, ``hydra.launcher.timeout_min=30``)
 """
 
@@ -92,7 +92,8 @@ def suite_instances(opts: dict, cache: Path):
 
         return load_user(opts["user"])
     suite = load_suite(opts["suite"])
-    insts = [i for i in suite.instances if not opts["only"] or fnmatch.fnmatch(i.name, opts["only"])]
+    globs = str(opts["only"]).split(",") if opts["only"] else []
+    insts = [i for i in suite.instances if not globs or any(fnmatch.fnmatch(i.name, g) for g in globs)]
     if opts["stage"] == "cost":
         from benchmark.studies.suite.cost import sample_instances
 

@@ -19,6 +19,7 @@ A batch of at most 1000 fits a SLURM array on most clusters (``MaxArraySize``).
 from __future__ import annotations
 
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -106,7 +107,9 @@ def launch(jobs: list[Job], configs: dict[str, dict], suite: SuiteSpec, cache: P
     runs = Path(runs).resolve()
     for k in range(0, len(jobs), chunk):
         batch = jobs[k:k + chunk]
-        folder = Path(cache).resolve() / "launch" / f"batch{k // chunk:03d}"
+        # one folder per launching process: two suite processes on one cache (say, one per
+        # problem) must not delete each other's job files, which a sweep's jobs read when they start
+        folder = Path(cache).resolve() / "launch" / f"{os.getpid()}-batch{k // chunk:03d}"
         group = folder / "suite_job"
         group.mkdir(parents=True, exist_ok=True)
         for old in group.glob("*.yaml"):
