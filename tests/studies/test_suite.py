@@ -145,3 +145,27 @@ def test_default_reaches_the_issue_instance_the_previous_default_missed(issue_pr
     est = p.estimate(new.x)
     for k in ("Rs", "Ls", "Le", "Rr", "J"):
         assert abs(est[k] / p.truth[k] - 1) < 0.002, (k, est[k], p.truth[k])
+
+
+def test_the_full_suites_cost_scales_the_measured_cpu_by_evaluations_and_record_length(tmp_path):
+    from benchmark.studies.suite.cost import record_samples, scaled_cost
+
+    def suite(name, budget, seeds, motors):
+        doc = {"name": name, "seeds": seeds, "budget": budget, "polish_budget": 2000, "optimizers": ["cmaes"],
+               "records": {"max_samples": 3000} if name == "a" else {},
+               "timedomain": [{"motors": motors, "source": "independent", "experiment": "dol", "noise": "white"}],
+               "admittance": [{"motors": ["lindsay_barton_7p5hp"], "sweep": "full", "model": 6, "noise": 0.003}]}
+        (tmp_path / f"{name}.yaml").write_text(yaml.safe_dump(doc))
+        return load_suite(str(tmp_path / f"{name}.yaml"))
+
+    small, full = suite("a", 10000, 3, ["alonge_1kw"]), suite("b", 20000, 10, ["alonge_1kw", "krause_500hp"])
+    est = scaled_cost({"timedomain": 3600.0, "admittance": 360.0}, {"timedomain": 1000, "admittance": 300},
+                      small, full, startup_s=2.0)
+    evals = (20000 + 2000) / (10000 + 2000)
+    length = np.mean(list(record_samples(full).values())) / np.mean(list(record_samples(small).values()))
+    assert est["evaluations_ratio"] == pytest.approx(evals) and length > 1
+    td, adm = est["per_problem"]["timedomain"], est["per_problem"]["admittance"]
+    assert td["cpu_per_run_s"] == pytest.approx(3.6 * evals * length)
+    assert adm["cpu_per_run_s"] == pytest.approx(1.2 * evals)
+    assert (td["runs"], adm["runs"]) == (2 * 10 * 2, 10 * 2)  # instances x seeds x (polish off, on)
+    assert est["core_hours_slurm"] == pytest.approx(est["core_hours_workers"] + 60 * 2.0 / 3600)

@@ -116,3 +116,33 @@ def measure_cost(suite, chosen: list, cache: Path, out: Path) -> str:
               f"(start-up measured at {startup:.1f} CPU s per process).", ""]
     write_text_atomic(out / "cost.md", "\n".join(lines))
     return f"extrapolated cost: {total:.1f} core-hours (workers), {slurm:.1f} on SLURM -> {out / 'cost.md'}"
+
+
+def record_samples(suite) -> dict[str, float]:
+    """Samples of every time-domain instance's record (``instances.record_settings``), by name."""
+    from benchmark.studies.suite.instances import record_settings
+    from synthetic.zoo import get_motor
+
+    return {i.name: float(np.prod(record_settings(get_motor(i.motor), i, suite.records)))
+            for i in suite.instances if i.problem == "timedomain"}
+
+
+def scaled_cost(measured_cpu: dict[str, float], measured_runs: dict[str, int], small, full,
+                startup_s: float) -> dict:
+    """Another suite's cost from a finished suite's measured CPU seconds per problem
+    (``measured_cpu``, over ``measured_runs`` runs): CPU per run scaled by evaluations
+    (budget + polish) and, on the time domain, by the mean record length in samples (an
+    evaluation's cost is proportional to it; the run's fixed cost is scaled too, so the
+    estimate errs high). On SLURM every run is its own process: ``startup_s`` CPU seconds more."""
+    evals = (full.budget + full.polish_budget) / (small.budget + small.polish_budget)
+    length = np.mean(list(record_samples(full).values())) / np.mean(list(record_samples(small).values()))
+    everything = [{"name": i.name, "problem": i.problem} for i in full.instances]
+    out = {}
+    for prob, cpu in measured_cpu.items():
+        per_run = cpu / measured_runs[prob] * evals * (length if prob == "timedomain" else 1.0)
+        runs = len(jobs_for(full, [d for d in everything if d["problem"] == prob]))
+        out[prob] = {"cpu_per_run_s": per_run, "runs": runs, "core_hours": runs * per_run / 3600}
+    total = sum(v["core_hours"] for v in out.values())
+    n = sum(v["runs"] for v in out.values())
+    return {"per_problem": out, "evaluations_ratio": evals, "record_length_ratio": float(length),
+            "core_hours_workers": total, "core_hours_slurm": total + n * startup_s / 3600}

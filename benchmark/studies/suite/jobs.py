@@ -4,10 +4,10 @@ sweeps through the project's launchers (joblib here, SLURM through ``imbench_slu
 Each run is a small config file of a ``suite_job`` group, ``# @package _global_``, that sets
 the instance (problem, data folder, bounds), the optimiser, ``seed``, ``polish`` and
 ``budget``. The runs still to do (no ``result.json`` in their folder yet) are written in
-batches of at most ``chunk`` into ``CACHE/launch/batchNNN/suite_job/`` and each batch is one
+batches of at most ``chunk`` into ``CACHE/launch/PID-batchNNN/suite_job/`` and each batch is one
 sweep::
 
-    python -m benchmark -m --config-dir CACHE/launch/batch000 '+suite_job=glob(*)' \\
+    python -m benchmark -m --config-dir CACHE/launch/PID-batch000 '+suite_job=glob(*)' \\
         hydra.sweep.dir=CACHE/runs 'hydra.sweep.subdir=${hydra:runtime.choices.suite_job}' [launcher]
 
 so every run writes the harness's ``result.json``, ``history.csv`` and journal in
