@@ -76,6 +76,7 @@ from benchmark.analysis.tables import (
 )
 from benchmark.analysis.targets import (
     Row,
+    ecdf,
     quantile,
     summarize,
 )
@@ -154,7 +155,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
         fig, ax = new_figure(figsize=(9, 4.5))
         for row in grp:
             hits = np.array([r.evals_to(t) for r in row.runs for t in inst[(r.group, r.instance)].ecdf_targets()])
-            frac = np.array([np.mean(hits <= e) for e in grid])
+            frac = ecdf(hits, grid)
             ax.step(
                 grid,
                 frac,

@@ -16,7 +16,7 @@ IOH_FORMAT_VERSION = "0.3.22"  # the IOHexperimenter Analyzer-logger format writ
 
 
 # -- IOHprofiler export ---------------------------------------------------------------------------
-def write_ioh(rows: list[Row], out: Path) -> Path:
+def write_ioh(rows: list[Row], out: Path, y_note: str | None = None) -> Path:
     """Runs in the format of IOHexperimenter's Analyzer logger (what IOHanalyzer loads): per
     optimiser a folder with ``IOHprofiler_f<id>_<problem>.json`` (meta-data: function, algorithm,
     one scenario per dimension with each run's instance, evaluations and best point) and
@@ -87,8 +87,8 @@ def write_ioh(rows: list[Row], out: Path) -> Path:
         f"(version {IOH_FORMAT_VERSION}): load this folder, or ioh.zip, in IOHanalyzer.\n"
         "Function ids: " + "; ".join(f"f{fids[g]} = {g}" for g in groups) + ".\n"
         "Rows are the harness's history (one per improvement of the best cost) plus the last evaluation, "
-        "so raw_y is the best cost so far; a first row at evaluation 1 carries the best cost of the first "
-        "batch (readers split runs there). Instances are noise.seed + 1.\n"
+        + (y_note or "so raw_y is the best cost so far; a first row at evaluation 1 carries the best cost of "
+                     "the first batch (readers split runs there). Instances are noise.seed + 1.") + "\n"
     )
     shutil.make_archive(str(out / "ioh"), "zip", root_dir=root)
     return root

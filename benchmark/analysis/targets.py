@@ -41,18 +41,42 @@ class Instance:
         return self.best + np.geomspace(top, finest, ECDF_TARGETS)
 
 
+def instance_targets(fstar: float, first_costs) -> Instance:
+    """The target scale of an instance whose best-known cost is ``fstar``, given the runs' first
+    costs: precisions are relative to ``|f*|``, or to ``NEGLIGIBLE`` times the cost range
+    (median first cost - f*) when f* is ~0 (noise-free data, exact model)."""
+    firsts = [float(c) for c in first_costs if math.isfinite(c)]
+    span = abs(quantile(firsts, 0.5) - fstar) if firsts and math.isfinite(fstar) else math.nan
+    span = span if span > 0 and math.isfinite(span) else 1.0
+    scale = max(abs(fstar), NEGLIGIBLE * span) if math.isfinite(fstar) else span
+    return Instance(best=fstar, scale=scale, span=span)
+
+
 def instances(runs: list[Run]) -> dict[tuple[str, str], Instance]:
     out = {}
     for key in sorted({(r.group, r.instance) for r in runs}):
         sel = [r for r in runs if (r.group, r.instance) == key]
         fstar = min((r.final_cost for r in sel), default=math.inf)
-        firsts = [float(r.best[0]) for r in sel if len(r.best) and math.isfinite(r.best[0])]
-        span = abs(quantile(firsts, 0.5) - fstar) if firsts and math.isfinite(fstar) else math.nan
-        span = span if span > 0 and math.isfinite(span) else 1.0
-        # a fit that reaches ~0 (noise-free data, exact model): precisions relative to the range
-        scale = max(abs(fstar), NEGLIGIBLE * span) if math.isfinite(fstar) else span
-        out[key] = Instance(best=fstar, scale=scale, span=span)
+        out[key] = instance_targets(fstar, [r.best[0] for r in sel if len(r.best)])
     return out
+
+
+def ert(hits, totals) -> float:
+    """Expected running time (COCO): the evaluations all runs spent until they reached the target
+    (``hits``, inf when never) or stopped (``totals``), over the number that reached it."""
+    hits = np.asarray(hits, float)
+    reached = np.isfinite(hits)
+    spent = float(np.sum(np.where(reached, hits, np.asarray(totals, float))))
+    return spent / int(reached.sum()) if reached.any() else math.inf
+
+
+def ecdf(hits, grid) -> np.ndarray:
+    """Fraction of (run, target) pairs reached within each budget of ``grid`` (``hits``: the
+    evaluations each pair needed, inf when never), as COCO and IOHanalyzer draw runtime ECDFs."""
+    hits = np.sort(np.asarray(hits, float).ravel())
+    if not len(hits):
+        return np.zeros(len(grid))
+    return np.searchsorted(hits, np.asarray(grid, float), side="right") / len(hits)
 
 
 @dataclass
@@ -140,8 +164,7 @@ def _row(group, alg, sel: list[Run], params, inst, opts) -> Row:
     reached = [h for h in hits if math.isfinite(h)]
     v["target_reached"] = len(reached)
     v["evals_to_target_median"] = quantile(reached, 0.5)
-    spent = sum(h if math.isfinite(h) else r.total_evals for h, r in zip(hits, sel, strict=True))
-    v["ert"] = spent / len(reached) if reached else math.inf
+    v["ert"] = ert(hits, [r.total_evals for r in sel])
     # fixed budgets
     for b in opts["budgets"]:
         at = [r.best_at(b) for r in sel]
