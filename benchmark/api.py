@@ -198,7 +198,7 @@ def _overrides(name: str, data, path: Path | None, overrides: dict) -> list[str]
 
 def _folder_problem(path: Path) -> str | None:
     from benchmark.core.harness import DATA_KIND_PROBLEM
-    from benchmark.core.tables import read_yaml
+    from benchmark.core.meta_file import read_yaml
 
     try:
         meta = read_yaml(path / "meta.yaml")

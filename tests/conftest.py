@@ -26,6 +26,31 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 if os.environ.get("PYTEST_XDIST_WORKER"):
     numba.set_num_threads(1)
 
+#: The test files that take longest (CPU seconds on the CI's two cores, measured with
+#: ``--durations``), longest first: they start first, so that the two workers finish together
+#: instead of one running a five-minute file alone at the end. The rest keep their order.
+LONGEST_FILES = (
+    "problems/timedomain/test_load_step_during_startup.py",  # ~300 s: motulator's six-step start and stop
+    "problems/timedomain/test_diagnosis.py",  # ~350 s over its tests
+    "cli/test_readme.py",  # ~150 s: every quick fenced command of the README and docs
+    "problems/timedomain/test_load_step_held_by_stop.py",  # ~115 s
+    "problems/timedomain/test_braking_stop.py",
+    "problems/timedomain/test_noise_unsettled.py",
+    "cli/test_suggested_commands.py",
+    "problems/timedomain/test_timedomain.py",
+    "problems/timedomain/test_load_after_slow_ramp.py",
+    "problems/timedomain/test_load_step_instant.py",
+    "cli/test_example.py",
+    "studies/test_zoo.py",
+)
+_TESTS = Path(__file__).resolve().parent
+
+
+def pytest_collection_modifyitems(items):
+    rank = {name: i for i, name in enumerate(LONGEST_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.relative_to(_TESTS).as_posix(), len(rank)))  # stable
+
+
 CONF = str(Path(__file__).resolve().parents[1] / "conf")
 PAPER_MOTOR = InductionMotor(Rs=4.96434, Ls=0.1075, Le=0.01098, Rr=1.55618, J=0.00642, fv=0.00033, fc=0.04297, p=1)
 

@@ -14,7 +14,8 @@ import pandas as pd
 from benchmark.core.errors import DataError
 from benchmark.core.harness import DATA_KIND_PROBLEM
 from benchmark.core.io import write_table_atomic, write_yaml_atomic
-from benchmark.core.tables import read_all_columns, read_meta, read_yaml
+from benchmark.core.meta_file import read_meta, read_yaml
+from benchmark.core.tables import read_all_columns
 
 #: Tables a data folder may hold, by the start of their file name (``startup_2.csv``, ``sweep_up.mat``).
 TABLE_PREFIXES = ("startup", "stop", "sweep")

@@ -25,7 +25,6 @@ import contextlib
 import csv
 import difflib
 import io
-import math
 import re
 import warnings
 from collections.abc import Sequence
@@ -33,7 +32,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from benchmark.core.errors import DataError
 
@@ -119,70 +117,6 @@ def decode_text(path: Path, raw: bytes) -> str:
         raise DataError(path, f"contains a NUL character on line {text.count(chr(10), 0, nul) + 1} "
                               "(a binary file, or text in an encoding without a byte-order mark?)")
     return text
-
-
-def read_yaml(path: Path, max_bytes: int = MAX_YAML_BYTES):
-    """Parse a YAML file (safe loader). Whatever it holds, the result is the document or a
-    DataError: also for YAML that parses but cannot be built (an impossible date, deep
-    nesting)."""
-    text = read_text(path, max_bytes=max_bytes, what="YAML file")
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise DataError(path, f"not valid YAML: {_one_line(exc)}") from None
-    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
-        # e.g. 'date: 2001-02-30' (the safe loader builds dates), or thousands of nested '['
-        raise DataError(path, f"not valid YAML: {type(exc).__name__}: {_one_line(exc)}") from None
-
-
-def read_meta(folder: Path, required: dict[str, type | tuple[type, ...]]) -> dict:
-    """Read ``folder/meta.yaml`` and check that each required key is present with a usable type."""
-    folder = Path(folder)
-    path = folder / "meta.yaml"
-    if not folder.is_dir():
-        raise DataError(folder, "data set folder does not exist" if not folder.exists()
-                        else "is not a folder: data.path names a data set folder (meta.yaml + CSV tables)")
-    if not path.exists():
-        raise DataError(path, "missing: every data set folder needs a meta.yaml (docs/data_format.md)")
-    meta = read_yaml(path)
-    if not isinstance(meta, dict):
-        raise DataError(path, f"must be a mapping of keys to values, got {type(meta).__name__}")
-    for key, kind in required.items():
-        if key not in meta:
-            raise DataError(path, f"missing key '{key}'" + _did_you_mean(key, [str(k) for k in meta]))
-        meta[key] = check_meta_type(path, key, meta[key], kind)
-    return meta
-
-
-def check_meta_type(path: Path, key: str, value, kind):
-    """Check a meta.yaml value's type and return it (a float written as ``1e-3``, which YAML
-    reads as a string, is accepted as the number). Numbers must be finite; a float key gets
-    a Python float (an integer too large for a float is refused)."""
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    if float in kinds and isinstance(value, str):
-        try:
-            value = float(value.strip())
-        except ValueError:
-            pass
-    ok = any(
-        isinstance(value, k) and not (k in (int, float) and isinstance(value, bool)) for k in kinds
-    )
-    if float in kinds and isinstance(value, int) and not isinstance(value, bool):
-        ok = True
-    if not ok:
-        names = " or ".join(k.__name__ for k in kinds)
-        raise DataError(path, f"key '{key}' must be {names}, got {_short_repr(value)}")
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        try:
-            finite = math.isfinite(value)
-        except OverflowError:
-            finite = False
-        if not finite or abs(value) > 1e300:
-            raise DataError(path, f"key '{key}' must be a finite number of sensible size, "
-                                  f"got {_short_repr(value)}")
-        if float in kinds and int not in kinds:
-            value = float(value)
-    return value
 
 
 def read_table(

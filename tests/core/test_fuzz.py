@@ -34,7 +34,8 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from benchmark.core.errors import DataError
-from benchmark.core.tables import read_meta, read_table
+from benchmark.core.meta_file import read_meta
+from benchmark.core.tables import read_table
 from benchmark.problems.timedomain.data import load_startup_dataset
 
 pytestmark = pytest.mark.filterwarnings("ignore::benchmark.core.errors.DataWarning")

@@ -35,7 +35,8 @@ import numpy as np
 
 from benchmark.core.errors import DataError
 from benchmark.core.io import write_table_atomic, write_yaml_atomic
-from benchmark.core.tables import read_meta, read_table
+from benchmark.core.meta_file import read_meta
+from benchmark.core.tables import read_table
 from benchmark.problems.admittance.circuit import slip_from_speed, speed_from_slip
 
 __all__ = ["AdmittanceData", "load_admittance", "load_steady_state", "write_admittance", "read_truth"]

@@ -54,7 +54,8 @@ import numpy as np
 
 from benchmark.core.errors import DataError, DataWarning
 from benchmark.core.io import write_table_atomic, write_yaml_atomic
-from benchmark.core.tables import read_meta, read_table
+from benchmark.core.meta_file import read_meta
+from benchmark.core.tables import read_table
 from benchmark.problems.admittance.circuit import copper_factor
 from benchmark.problems.admittance.data import AdmittanceData
 from benchmark.problems.admittance.noload import FrictionWindage, friction_windage

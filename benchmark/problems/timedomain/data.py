@@ -24,14 +24,8 @@ import numpy as np
 from benchmark.core.errors import DataError, DataWarning
 from benchmark.core.io import write_table_atomic, write_yaml_atomic
 from benchmark.core.matfiles import read_mat_table
-from benchmark.core.tables import (
-    _did_you_mean,
-    _short_repr,
-    check_meta_type,
-    check_time_column,
-    read_meta,
-    read_table,
-)
+from benchmark.core.meta_file import check_meta_type, read_meta
+from benchmark.core.tables import _did_you_mean, _short_repr, check_time_column, read_table
 from benchmark.problems.timedomain.frames import clarke
 from benchmark.problems.timedomain.load_checks import check_records
 

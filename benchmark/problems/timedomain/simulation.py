@@ -36,13 +36,10 @@ costs ``+inf`` (never NaN); a chunk whose lanes have all diverged stops early.
 
 from __future__ import annotations
 
-import os
-import threading
-from concurrent.futures import ThreadPoolExecutor
-
 import numba
 import numpy as np
 
+from benchmark.problems.timedomain.kernel_pool import shared_executor
 from benchmark.problems.timedomain.motor import N_COEF
 
 #: Any state beyond this magnitude counts as a diverged simulation.
@@ -308,62 +305,6 @@ def _plan(coef: np.ndarray, n_blocks: int):
     return rows, coef_t, rows_padded, bounds
 
 
-_pool_state: dict = {"pool": None, "pid": None, "workers": 0}
-_pool_lock = threading.Lock()
-
-
-def _executor(workers: int) -> ThreadPoolExecutor:
-    """A process-wide thread pool (recreated after a fork or when more workers are needed)."""
-    with _pool_lock:
-        st = _pool_state
-        if st["pool"] is None or st["pid"] != os.getpid() or st["workers"] < workers:
-            if st["pool"] is not None and st["pid"] == os.getpid():
-                st["pool"].shutdown(wait=False)
-            st.update(pool=ThreadPoolExecutor(max_workers=workers, thread_name_prefix="imbench-sim"),
-                      pid=os.getpid(), workers=workers)
-        return st["pool"]
-
-
-_serial = threading.local()
-
-
-def kernel_threads() -> int:
-    """Threads a batched kernel call may use: numba's thread count, or 1 in a thread that runs
-    its own share of a parallel job (:func:`serial_kernels`)."""
-    return 1 if getattr(_serial, "on", False) else numba.get_num_threads()
-
-
-class serial_kernels:
-    """Context: kernel calls made by this thread run on this thread alone (a worker of a pool
-    that already runs jobs side by side on every core)."""
-
-    def __enter__(self):
-        self._was = getattr(_serial, "on", False)
-        _serial.on = True
-        return self
-
-    def __exit__(self, *exc):
-        _serial.on = self._was
-        return False
-
-
-def run_split(block_fn, n: int, *args) -> None:
-    """``block_fn(start, stop, *args)`` over ``0..n-1`` in :func:`kernel_threads` nearly equal
-    blocks run in parallel (the compiled block functions release the GIL); the calling thread
-    takes the first."""
-    nb = max(1, min(kernel_threads(), n))
-    bounds = [b * n // nb for b in range(nb + 1)]
-    futures = []
-    if nb > 1:
-        pool = _executor(nb - 1)
-        futures = [pool.submit(block_fn, bounds[b], bounds[b + 1], *args) for b in range(1, nb)]
-    try:
-        block_fn(bounds[0], bounds[1], *args)
-    finally:
-        for f in futures:
-            f.result()
-
-
 def _run_blocks(block_fn, bounds, *args) -> None:
     """Run ``block_fn(start, stop, W, *args)`` for every block with its own work buffer ``W``, in
     parallel (the compiled block functions release the GIL); the calling thread takes the first."""
@@ -372,7 +313,7 @@ def _run_blocks(block_fn, bounds, *args) -> None:
         return
     futures = []
     if nb > 1:
-        pool = _executor(nb - 1)
+        pool = shared_executor(nb - 1)
         futures = [pool.submit(block_fn, bounds[b], bounds[b + 1], np.empty(_N_ROWS * LANES), *args)
                    for b in range(1, nb)]
     try:

@@ -16,7 +16,7 @@ from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
 from benchmark.problems.timedomain.diagnosis.pipeline import base_context, friction_scale
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch
-from benchmark.problems.timedomain.simulation import serial_kernels
+from benchmark.problems.timedomain.kernel_pool import serial_kernels
 from tests.conftest import PAPER_MOTOR, compose_config
 
 EFFECTS = load_effects("timedomain")

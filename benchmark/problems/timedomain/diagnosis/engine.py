@@ -5,7 +5,7 @@ look-ahead, each drop-one refit of the backward check) do not depend on one anot
 on a pool of worker threads, one per numba thread (``numba.get_num_threads()``, 2 on the
 project's CI machine): the extended model's kernel and NumPy's array operations release the
 GIL, so the workers' simulations and residuals proceed together, and inside a worker every
-kernel call stays on that worker's core (:func:`~benchmark.problems.timedomain.simulation.serial_kernels`),
+kernel call stays on that worker's core (:func:`~benchmark.problems.timedomain.kernel_pool.serial_kernels`),
 where called from the main thread a kernel call splits its rows over the cores instead.
 
 Every fit computes exactly what it computes alone: the results, and so every verdict, are the
@@ -29,7 +29,7 @@ from contextlib import contextmanager
 
 import numba
 
-from benchmark.problems.timedomain.simulation import serial_kernels
+from benchmark.problems.timedomain.kernel_pool import serial_kernels
 
 _local = threading.local()
 _pool_state: dict = {"pool": None, "pid": None, "workers": 0}

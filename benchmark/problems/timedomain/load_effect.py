@@ -1,0 +1,150 @@
+"""The load on the shaft: a time-domain effect that bench records bring (a DC machine, a brake,
+a fan). Beside the sensor and shaft effects of :mod:`benchmark.problems.timedomain.bench_effects`.
+
+``load_torque``
+    A load torque on the shaft. Size: the load torque over the context's torque scale
+    (:attr:`EffectContext.torque_scale <benchmark.core.effects.EffectContext.torque_scale>`:
+    ``T_acc``, the mean torque that accelerates the rotor to its final speed, about 1-2 times
+    rated torque on a direct-on-line start; in the diagnosis at least the rated torque
+    estimated from the base model), 0.05-0.6 (10-100 % of rated); forms ``kind``: ``constant``
+    (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
+    (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record),
+    ``dc_machine`` (a DC generator switched onto a resistor at ``step_fraction``: its torque
+    ``T w/w_sync`` rises with its armature's time constant ``tau``, s, and may be switched off
+    at ``off_fraction``). One augmentation fits all four: extras ``load_const``, ``load_quad``,
+    ``load_step`` (over the torque scale, each within 0-1.5), ``load_step_time`` (fraction of the
+    record), ``load_step_speed`` (share of the switched load proportional to speed),
+    ``load_step_tau`` (its first-order rise, s, from one sample: abrupt enough to excite a
+    coupling resonance as a real step does, smooth enough for its instant to be fitted between
+    samples) and ``load_step_off`` (its switch-off, fraction of the record; never when at or
+    before the switch-on).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from benchmark.core.effects import Effect
+from benchmark.problems.timedomain.extended import IDX
+
+#: Share of the rated torque left to the motor's own Coulomb friction when a start moves the
+#: base's friction into a load (a motor's own friction is 0.3-2 % of its rated torque).
+OWN_FRICTION_SHARE = 0.01
+
+
+class LoadTorque(Effect):
+    name = "load_torque"
+    size_name = "torque_over_T_acc"
+    realistic = (0.05, 0.6)
+    extra_names = ("load_const", "load_quad", "load_step", "load_step_time", "load_step_speed", "load_step_tau",
+                   "load_step_off")
+    extra_units = ("p.u. of torque scale", "p.u. of torque scale at w_sync", "p.u. of torque scale",
+                   "fraction of record", "fraction of switched load", "s", "fraction of record")
+    physics = ("a load torque: constant, ~speed^2, or switched on (and off) at unknown instants through a "
+               "first-order rise, in part proportional to speed (a DC machine's armature circuit)")
+    shows_in = "steady slip and current rise over a window; a speed dip"
+    FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]},
+                  {"kind": "dc_machine", "step_fraction": [0.3, 0.6], "tau": [0.01, 0.06]}]
+    #: Longest rise of a switched load, s: a DC machine's armature circuit (L_a/R, 5-100 ms with
+    #: its load resistor), a contactor-switched brake.
+    MAX_RISE = 0.2
+
+    def plant(self, row, size, ctx, form=None):
+        form = {**self.form, **(form or {})}
+        kind = str(form.get("kind", "constant"))
+        row = row.copy()
+        T = float(size) * ctx.torque_scale
+        if kind == "constant":
+            row[IDX["T_L"]] = T
+        elif kind == "quadratic":
+            row[IDX["T_q"]] = T
+            row[IDX["w_ref"]] = ctx.w_sync
+        elif kind in ("step", "dc_machine"):
+            row[IDX["T_s"]] = T
+            row[IDX["t_step"]] = float(form.get("step_fraction", 0.5)) * ctx.record_duration
+            row[IDX["t_rise"]] = 0.0
+            if kind == "dc_machine":  # a DC generator on a resistor: T = T_s (w/w_sync), its armature's rise
+                row[IDX["w_ref"]] = ctx.w_sync
+                row[IDX["T_s_speed"]] = 1.0
+                row[IDX["tau_s"]] = float(form.get("tau", 0.03))
+                off = form.get("off_fraction")
+                row[IDX["t_step_off"]] = 0.0 if off is None else float(off) * ctx.record_duration
+        else:
+            raise ValueError(f"load_torque: kind must be constant, quadratic, step or dc_machine, got {kind!r}")
+        return row
+
+    def extra_bounds(self, ctx):
+        """Torques over the torque scale (0-1.5: a motor cannot drive much more than its rated
+        torque), the switch-on instant (fraction of the record), the share of the switched load
+        that follows speed (0-1), its rise time constant (one sample to :data:`MAX_RISE`, s) and
+        the switch-off instant (fraction of the record; at or before the switch-on: never)."""
+        ts = max(ctx.sample_time, 1e-6)
+        return (np.array([0.0, 0.0, 0.0, 0.02, 0.0, ts, 0.02]),
+                np.array([1.5, 1.5, 1.5, 0.98, 1.0, max(self.MAX_RISE, 2 * ts), 1.0]))
+
+    def extra_starts(self, ctx):
+        ts = max(ctx.sample_time, 1e-6)
+        starts = [np.array([0.1, 0.1, 0.0, 0.5, 0.0, ts, 1.0])]
+        starts += [np.array([0.0, 0.0, 0.2, t, 0.0, ts, 1.0]) for t in (0.35, 0.65, 0.85)]
+        change = ctx.load_change
+        if change is not None:  # a step where the current envelope jumps: the first start (the screening's)
+            lo, hi = self.extra_bounds(ctx)
+            on = float(np.clip(change / ctx.record_duration, lo[3], hi[3]))
+            starts.insert(0, np.array([0.0, 0.0, 0.2, on, 0.0, ts, 1.0]))
+            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, 1.0]))  # a DC machine loaded there
+            if ctx.load_release is not None:  # ... and switched off where the envelope falls most
+                off = float(np.clip(ctx.load_release / ctx.record_duration, on, 1.0))
+                starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, off]))
+        return starts
+
+    def starts_from_base(self, base, ctx):
+        """A step load that stays on through the coast-down brakes the stop record as Coulomb
+        friction does, so the stop's pre-identification puts it into the base's ``fc`` (own
+        blind seed 49 set 38: a 0.50 N m step at 0.42 of the record, read as ``fc`` 0.55 N m
+        against the motor's 0.04), and a step started at zero on top of that friction only adds
+        torque the start-up before the step does not have (chosen second, behind a double cage
+        that soaked up the pre-step misfit). One start with the friction above
+        :data:`OWN_FRICTION_SHARE` of the rated torque moved into the step, at the first step
+        start's instant (the start grid then moves it)."""
+        fc, scale = float(base.get("fc", 0.0)), ctx.torque_scale
+        own = OWN_FRICTION_SHARE * ctx.T_rated
+        if scale <= 0 or ctx.T_rated <= 0 or fc <= 2.0 * own:
+            return []
+        lo, hi = self.extra_bounds(ctx)
+        step = next(s for s in self.extra_starts(ctx) if s[2] > 0).copy()
+        step[2] = float(np.clip((fc - own) / scale, lo[2], hi[2]))
+        return [({"fc": own}, step)]
+
+    def start_grid(self, ctx):
+        """The switch-on instant (fraction of the record) every half supply period: from afar the
+        local fits do not reach a one-sample edge (a step of 95 % of the rated torque at 0.73 s
+        of a 1.37 s direct-on-line record, started from the current envelope's 0.36 s, stayed
+        ``unexplained``), and the envelope's largest rise lags the step by up to a few periods."""
+        lo, hi = self.extra_bounds(ctx)
+        half_period = math.pi / max(ctx.w_e, 1e-9)
+        n = int(np.clip(ctx.record_duration / half_period, 8, 400))
+        return 3, np.linspace(lo[3], hi[3], n)
+
+    def augment(self, rows, extras, ctx):
+        rows = rows.copy()
+        T = ctx.torque_scale
+        rows[:, IDX["T_L"]] = extras[:, 0] * T
+        rows[:, IDX["T_q"]] = extras[:, 1] * T
+        rows[:, IDX["w_ref"]] = ctx.w_sync
+        rows[:, IDX["T_s"]] = extras[:, 2] * T
+        rows[:, IDX["t_step"]] = extras[:, 3] * ctx.record_duration
+        rows[:, IDX["t_rise"]] = ctx.sample_time
+        rows[:, IDX["T_s_speed"]] = extras[:, 4]
+        rows[:, IDX["tau_s"]] = extras[:, 5]
+        rows[:, IDX["t_step_off"]] = extras[:, 6] * ctx.record_duration
+        return rows
+
+    def describe_fit(self, extras, ctx, base=None):
+        x = np.ravel(extras)
+        off = float(x[6] * ctx.record_duration) if x[6] > x[3] and x[6] < 1.0 else None
+        return {"constant_Nm": float(x[0] * ctx.torque_scale), "quadratic_at_sync_Nm": float(x[1] * ctx.torque_scale),
+                "switched_Nm": float(x[2] * ctx.torque_scale), "switched_on_s": float(x[3] * ctx.record_duration),
+                "switched_share_following_speed": float(x[4]), "switched_rise_s": float(x[5]),
+                "switched_off_s": off}
