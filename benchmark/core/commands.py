@@ -10,13 +10,14 @@ quoted for a POSIX shell.
 from __future__ import annotations
 
 import shlex
-from pathlib import Path
 
 import yaml
 from omegaconf import DictConfig, OmegaConf
 
+from benchmark.core.config_files import CONFIG_DIR
+
 #: The diagnosis's configuration: its top-level keys and groups are what its command accepts.
-DIAGNOSE_CONFIG = Path(__file__).resolve().parents[2] / "conf" / "diagnose.yaml"
+DIAGNOSE_CONFIG = CONFIG_DIR / "diagnose.yaml"
 #: Keys of a run that the diagnosis does not take over: its base identification uses its own
 #: optimiser and budgets (the default pipeline, which the diagnosis's thresholds were set with).
 NOT_FOR_DIAGNOSIS = ("optimizer", "budget", "polish_budget")

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.io import write_text_atomic
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord, StopRecord, write_startup_dataset
 
@@ -152,7 +153,7 @@ def main(argv: list[str]) -> None:
 
     from benchmark.core.harness import run_diagnosis
 
-    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    conf = str(CONFIG_DIR)
     work = Path("outputs/foreign_plant")
     rows = []
     for k, effect in enumerate(("none", "double_cage", "main_saturation", "leakage_saturation")):

@@ -30,6 +30,7 @@ import yaml
 from hydra import compose, initialize_config_dir
 from scipy.optimize import least_squares
 
+from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.harness import build_problem, run
 from benchmark.problems.admittance.ieee112 import standard_circuit
 from benchmark.problems.admittance.loadtest import read_loadtest
@@ -37,7 +38,7 @@ from benchmark.problems.admittance.noload import magnetising_curve
 from synthetic.loadtest import generate
 
 ROOT = Path(__file__).resolve().parents[2]
-CONF = str(ROOT / "conf")
+CONF = str(CONFIG_DIR)
 REAL = ROOT / "benchmark" / "problems" / "admittance" / "datasets" / "msl_18p5kw"
 #: The parameters scored, in table order.
 SCORED = ("R1_total", "R2", "X1+X2", "X0", "R0", "X1", "X2")

@@ -36,6 +36,8 @@ import time
 import warnings
 from pathlib import Path
 
+from benchmark.core.config_files import CONFIG_DIR
+
 SUCCESS_PARAMETERS = ("Rs", "Ls", "Le", "Rr", "J")
 SUCCESS_TOL = 0.02
 #: optimiser label -> harness overrides
@@ -88,7 +90,7 @@ def identify_record(folder: Path, pipeline: str, outdir: Path) -> dict:
 
     from benchmark.core.harness import run
 
-    conf = Path(__file__).resolve().parents[2] / "conf"
+    conf = CONFIG_DIR
     overrides = PIPELINES[pipeline] + [f"data.path={folder}", "figures=false", "checkpoint=false",
                                        "progress=false"]
     with initialize_config_dir(config_dir=str(conf), version_base=None):

@@ -13,8 +13,10 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from benchmark.core.config_files import CONFIG_DIR
+
 ROOT = Path(__file__).resolve().parents[3]
-CONF = str(ROOT / "conf")
+CONF = str(CONFIG_DIR)
 
 
 # -- small helpers ---------------------------------------------------------------------------

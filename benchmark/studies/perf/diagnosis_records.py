@@ -18,6 +18,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from benchmark.core.config_files import CONFIG_DIR
+
 #: (name, source, options). ``plant``: options of ``python -m synthetic.independent``;
 #: ``own``: Hydra overrides of ``python -m synthetic``; ``motulator``: keyword arguments of
 #: :func:`synthetic.motulator_source.make_motulator_dataset` (``motor``: ``preset`` is the
@@ -64,9 +66,8 @@ def motulator_motor(name: str) -> dict:
     if name == "preset":
         import yaml
 
-        from benchmark.studies.perf.common import ROOT
 
-        m = yaml.safe_load((ROOT / "conf" / "motor" / "alonge_1kw.yaml").read_text())
+        m = yaml.safe_load((CONFIG_DIR / "motor" / "alonge_1kw.yaml").read_text())
         return {"parameters": dict(m["parameters"]), "pole_pairs": int(m["pole_pairs"]), "frequency": 50.0,
                 "dc_link_voltage": float(m["test"]["dc_link_voltage"]), "rated_power": 1000.0}
     from synthetic.zoo import get_motor, motor_description
