@@ -41,17 +41,21 @@ def identify(data=None, *, outdir=None, **overrides) -> Identification:
 
     Parameters
     ----------
-    data : a data folder (path), a :class:`DataSet`, or None for the synthetic data of the
+    data
+        a data folder (path), a :class:`DataSet`, or None for the synthetic data of the
         motor preset (the paper's noise-free start-up by default).
-    outdir : folder for ``result.json``, ``history.csv`` and, with ``figures=True``, the figures
+    outdir
+        folder for ``result.json``, ``history.csv`` and, with ``figures=True``, the figures
         and ``report.md``; None keeps nothing on disk (figures are then drawn on demand with
         :meth:`Identification.figures`).
-    **overrides : configuration keys, e.g. ``optimizer="scipy_de"``, ``budget=5000``, ``seed=1``,
+    **overrides
+        configuration keys, e.g. ``optimizer="scipy_de"``, ``budget=5000``, ``seed=1``,
         ``polish=True``, ``problem__stator_resistance="prior"``, ``bounds={"Rs": [1, 10]}``.
 
     Returns
     -------
-    Identification : estimate (SI units), standard errors, correlation, fit quality, warnings.
+    Identification
+        estimate (SI units), standard errors, correlation, fit quality, warnings.
 
     Example
     -------
@@ -90,11 +94,15 @@ def diagnose(data=None, *, outdir=None, progress: Callable[[str], None] | None =
 
     Parameters
     ----------
-    data : a data folder, a :class:`DataSet`, or None for the synthetic plant of the motor
+    data
+        a data folder, a :class:`DataSet`, or None for the synthetic plant of the motor
         preset with ``effects=[...]`` injected.
-    outdir : folder for ``diagnosis.json``, ``diagnosis.md`` and the figures; None keeps nothing.
-    progress : called with each candidate's name as it is fitted (e.g. ``print``).
-    **overrides : keys of ``python -m benchmark.diagnose --help``: ``candidates=[...]``,
+    outdir
+        folder for ``diagnosis.json``, ``diagnosis.md`` and the figures; None keeps nothing.
+    progress
+        called with each candidate's name as it is fitted (e.g. ``print``).
+    **overrides
+        keys of ``python -m benchmark.diagnose --help``: ``candidates=[...]``,
         ``budget=...``, ``diagnosis__max_effects=2``, ``effects=["double_cage"]`` (synthetic), ...
 
     Example
@@ -126,17 +134,21 @@ def simulate(params: dict, data=None, **overrides) -> pd.DataFrame:
 
     Parameters
     ----------
-    params : the model's parameters in SI units, e.g. ``Identification.estimate``: for the
+    params
+        the model's parameters in SI units, e.g. ``Identification.estimate``: for the
         time-domain model ``Rs`` (ohm), ``Ls``, ``Le`` (H), ``Rr`` (ohm), ``J`` (kg m^2), ``fv``
         (N m s/rad), ``fc`` (N m); for the slip sweep the circuit's ``R1_total, X1, R2, X2, R0,
         X0`` (ohm; ``R2sigma``, ``X3`` with the 8-parameter model).
-    data : a data folder, a :class:`DataSet`, or None (the motor preset's synthetic data). The
+    data
+        a data folder, a :class:`DataSet`, or None (the motor preset's synthetic data). The
         record is conditioned on load, as for an identification.
-    **overrides : configuration keys, as for :func:`identify` (``problem=...``, ``motor=...``).
+    **overrides
+        configuration keys, as for :func:`identify` (``problem=...``, ``motor=...``).
 
     Returns
     -------
-    DataFrame : time domain: ``record`` (index of the start-up record), ``t`` (s), the simulated
+    DataFrame
+        time domain: ``record`` (index of the start-up record), ``t`` (s), the simulated
         ``i_alpha``, ``i_beta`` (A), ``speed`` (mechanical rad/s) and the measured
         ``i_alpha_measured``, ... (the model starts from rest); slip sweep: ``slip``, the model's
         ``G``, ``B`` (S per phase) and the measured ``G_measured``, ``B_measured``.

@@ -28,14 +28,18 @@ class DataSet:
 
     Attributes
     ----------
-    meta : the contents of ``meta.yaml`` (``kind``, ``pole_pairs``, ``sample_time`` in s, ...;
+    meta
+        the contents of ``meta.yaml`` (``kind``, ``pole_pairs``, ``sample_time`` in s, ...;
         SI units, the keys of ``docs/data_format.md``).
-    tables : one DataFrame per record, keyed by its file name without suffix (``startup``,
+    tables
+        one DataFrame per record, keyed by its file name without suffix (``startup``,
         ``stop``, ``startup_2``, ``sweep``), columns as in the files (``t`` in s, ``v_alpha`` in V,
         ``i_alpha`` in A, ``speed`` in rad/s or rpm as ``meta["speed_unit"]`` says, ...).
-    truth : the generator's ``truth.yaml`` (true parameters, injected effects) or None. An
+    truth
+        the generator's ``truth.yaml`` (true parameters, injected effects) or None. An
         identification reads it only to score its errors; a diagnosis never does.
-    folder : the folder it was loaded from, or None when made in memory.
+    folder
+        the folder it was loaded from, or None when made in memory.
 
     Example
     -------

@@ -20,11 +20,14 @@ class MotulatorModel:
 
     Attributes
     ----------
-    machine_pars : ``motulator.drive.utils.InductionMachinePars``, the Gamma model (``R_s``,
+    machine_pars
+        ``motulator.drive.utils.InductionMachinePars``, the Gamma model (``R_s``,
         ``R_r`` in ohm, ``L_ell``, ``L_s`` in H, ``n_p`` pole pairs) equivalent to the identified
         ``Rs, Ls, Le, Rr`` (whose rotor is referred so that ``Lr = Ls``).
-    machine : ``motulator.drive.model.InductionMachine(machine_pars)``.
-    mechanics : ``motulator.drive.model.StiffMechanicalSystem`` with the identified inertia
+    machine
+        ``motulator.drive.model.InductionMachine(machine_pars)``.
+    mechanics
+        ``motulator.drive.model.StiffMechanicalSystem`` with the identified inertia
         ``J`` (kg m^2) and the friction torque ``fv w_M + fc sign(w_M)`` (N m) as its load
         coefficient ``B_L(|w_M|) = fv + fc / max(|w_M|, 1e-3 rad/s)``.
     """

@@ -40,21 +40,34 @@ class Identification(_Document):
 
     Attributes
     ----------
-    problem, optimizer : ``timedomain`` or ``admittance``; the optimiser plugin's name.
-    seed : the master seed (same seed, same result, bit for bit).
-    status : ``converged``, ``budget_spent``, ``failed`` or ``timeout``.
-    estimate : every model parameter, ``{name: value}`` in SI units (:attr:`units`).
-    units : ``{name: unit}`` of the parameters (``Rs``: ohm, ``Ls``: H, ``J``: kg m^2, ...).
-    standard_error : ``{name: value}`` of the searched parameters (HAC: honest for coloured
+    problem, optimizer
+        ``timedomain`` or ``admittance``; the optimiser plugin's name.
+    seed
+        the master seed (same seed, same result, bit for bit).
+    status
+        ``converged``, ``budget_spent``, ``failed`` or ``timeout``.
+    estimate
+        every model parameter, ``{name: value}`` in SI units (:attr:`units`).
+    units
+        ``{name: unit}`` of the parameters (``Rs``: ohm, ``Ls``: H, ``J``: kg m^2, ...).
+    standard_error
+        ``{name: value}`` of the searched parameters (HAC: honest for coloured
         residuals and model error), in their units; parameters fixed by the data have none.
-    correlation : correlation matrix of the searched parameters (a DataFrame), or None.
-    fit_quality : per channel, the RMS misfit over the noise estimated from the data, the band
+    correlation
+        correlation matrix of the searched parameters (a DataFrame), or None.
+    fit_quality
+        per channel, the RMS misfit over the noise estimated from the data, the band
         of the noise level and whether the fit is within it.
-    warnings : what the user must know before trusting the estimate (empty when all is well).
-    truth, rel_error : the true parameters and signed relative errors (synthetic data), or None.
-    cost, evaluations, wall_time_s : final cost, evaluations counted, seconds.
-    outdir : the folder ``result.json`` and its companions were written to, or None.
-    record : the whole ``result.json`` document.
+    warnings
+        what the user must know before trusting the estimate (empty when all is well).
+    truth, rel_error
+        the true parameters and signed relative errors (synthetic data), or None.
+    cost, evaluations, wall_time_s
+        final cost, evaluations counted, seconds.
+    outdir
+        the folder ``result.json`` and its companions were written to, or None.
+    record
+        the whole ``result.json`` document.
     """
 
     problem: str
@@ -157,18 +170,28 @@ class Diagnosis(_Document):
 
     Attributes
     ----------
-    status : ``no_gap`` (the base model is at the noise level), ``explained``,
+    status
+        ``no_gap`` (the base model is at the noise level), ``explained``,
         ``partly_explained`` or ``unexplained``.
-    verdict : the effects named, joined by ``+`` (``none`` when there is no gap).
-    effects : the effects chosen, in order of selection.
-    explained_share : share of the excess held-out misfit (above the noise) they remove, 0-1.
-    gap_before, gap_after : held-out RMS residual over the noise (1 = the noise level) of the
+    verdict
+        the effects named, joined by ``+`` (``none`` when there is no gap).
+    effects
+        the effects chosen, in order of selection.
+    explained_share
+        share of the excess held-out misfit (above the noise) they remove, 0-1.
+    gap_before, gap_after
+        held-out RMS residual over the noise (1 = the noise level) of the
         base model and of the final model.
-    per_effect : for each effect, its drop-one share and fitted parameters (value, standard error).
-    base : the base model's parameters in the final model, with standard errors (SI units).
-    document : the whole ``diagnosis.json`` document.
-    report : the text of ``diagnosis.md`` (what ``str()`` prints).
-    outdir : the folder it was written to, or None.
+    per_effect
+        for each effect, its drop-one share and fitted parameters (value, standard error).
+    base
+        the base model's parameters in the final model, with standard errors (SI units).
+    document
+        the whole ``diagnosis.json`` document.
+    report
+        the text of ``diagnosis.md`` (what ``str()`` prints).
+    outdir
+        the folder it was written to, or None.
     """
 
     status: str
