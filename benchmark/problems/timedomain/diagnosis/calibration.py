@@ -25,7 +25,7 @@ from benchmark.problems.timedomain.diagnosis.run import diagnosis_settings, iden
 from benchmark.problems.timedomain.settings import TimeDomainSettings
 
 #: Shares the calibration tries (the rule's ``tau``).
-SHARES = (0.5, 0.6, 0.7, 0.8)
+SHARES = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 
 
 def diagnose_at_shares(run: Mapping, dataset: StartupDataset, identify: Callable, shares=SHARES) -> list[dict]:

@@ -1,0 +1,46 @@
+"""The calibration's scoring (benchmark.problems.timedomain.diagnosis.calibration): false
+selections, exact verdicts and channel_delay's false rate per share, and the chosen share."""
+
+from __future__ import annotations
+
+import pytest
+
+from benchmark.problems.timedomain.diagnosis.calibration import chosen_share, rates
+
+
+def verdict(share, status, effects=(), held=(), removed=()):
+    return {"share": share, "status": status, "effects": list(effects), "held_by_base": [{"effect": h} for h in held],
+            "removed_by_conditioning": list(removed)}
+
+
+def sets():
+    # four sets at two shares; at 0.3 the rule names one effect too many on sets 1 and 3
+    return [
+        {"injected": [], "skew_candidate": True,
+         "verdicts": [verdict(0.3, "no_gap"), verdict(0.6, "no_gap")]},
+        {"injected": ["double_cage"], "skew_candidate": True,
+         "verdicts": [verdict(0.3, "explained", ["double_cage", "channel_delay"]),
+                      verdict(0.6, "explained", ["double_cage"])]},
+        {"injected": ["load_torque"], "skew_candidate": False,
+         "verdicts": [verdict(0.3, "explained", held=["load_torque"]),
+                      verdict(0.6, "partly_explained", held=["load_torque"])]},  # a held load counts only when explained
+        {"injected": ["main_saturation", "two_mass"],
+         "verdicts": [verdict(0.3, "explained", ["main_saturation", "two_mass", "iron_loss"]),
+                      verdict(0.6, "unexplained", ["main_saturation"])]},  # unexplained names nothing
+    ]
+
+
+def test_rates_count_false_selections_exact_verdicts_and_the_skew_per_share():
+    low, high = rates(sets(), shares=(0.3, 0.6), n_boot=200)
+    assert (low["false_selection"], low["exact"]) == (0.5, 0.5)
+    assert (high["false_selection"], high["exact"]) == (0.0, 0.5)
+    assert (low["channel_delay_named_not_injected"], low["channel_delay_candidate_not_injected"]) == (1, 2)
+    assert high["channel_delay_named_not_injected"] == 0
+    lo, hi = low["false_selection_ci95"]
+    assert 0.0 <= lo < 0.5 < hi <= 1.0
+    assert high["false_selection_ci95"] == [0.0, 0.0]
+
+
+@pytest.mark.parametrize(("target", "chosen"), [(0.05, 0.6), (0.5, 0.3), (-1.0, None)])
+def test_the_chosen_share_is_the_smallest_within_the_target(target, chosen):
+    assert chosen_share(rates(sets(), shares=(0.3, 0.6), n_boot=50), target) == chosen
