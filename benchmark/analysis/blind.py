@@ -48,6 +48,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 
 from benchmark.analysis.blind_report import render, summarise, wilson  # noqa: F401  (re-exported)
 from benchmark.core.effects import load_effects
+from benchmark.problems.timedomain.diagnosis.named import named_effects
 from benchmark.core.io import write_text_atomic, write_yaml_atomic
 
 MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
@@ -296,35 +297,30 @@ def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dic
 
 
 def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
-    """One scored row: the injected ``effects`` against the diagnosis document ``doc``; an injected
-    effect the conditioning removed and named (``removed_by_conditioning``), or that the base model
-    holds under another name and the document says so (``held_by_base``: a constant load torque
-    as Coulomb friction) while the status is ``no_gap`` or ``explained``, counts as found.
+    """One scored row: the injected ``effects`` against every effect the diagnosis document
+    ``doc`` names (:func:`~benchmark.problems.timedomain.diagnosis.named.named_effects`: chosen,
+    found and removed by the conditioning, or held by the base where the data are accounted for).
+    A verdict that names nothing reads ``none`` (no gap) or ``unexplained``.
 
     ``alone_no_gap``: effects of a two-effect set whose own base-model gap (the set made with that
     effect alone, :func:`effect_alone_gaps`) is within the noise band. One the verdict does not name
     is left out of the set's score (``left_out_effects``), as a single effect the base model cannot
-    see is; the set is then scored on the other one. ``injected`` keeps the whole set."""
-    # named, whether injected or not; found only where the data are accounted for: a constant
-    # load in the base's Coulomb friction beside a gap left unexplained is no diagnosis of a load
-    # (motulator blind seed 45, sets 27 and 32: load steps during the start-up, unexplained at
-    # 4.6 and 6.3 times the noise, had counted as right)
-    held = [h["effect"] for h in doc.get("held_by_base", [])] if doc["status"] in ("no_gap", "explained") else []
-    conditioned = [e for e in doc.get("removed_by_conditioning", []) if e in effects]
-    found = conditioned + [e for e in held if e not in conditioned]
-    left = [e for e in effects if e in alone_no_gap and e not in found and e not in doc["effects"]]
+    see is; the set is then scored on the other one. ``injected`` keeps the whole set. A set is
+    left out as invisible only when its base is at the noise level and the diagnosis names nothing."""
+    named = named_effects(doc)
+    left = [e for e in effects if e in alone_no_gap and e not in named]
     injected, effects = list(effects), [e for e in effects if e not in left] if len(left) < len(effects) else effects
     left = [e for e in injected if e not in effects]
-    named = [e for e in effects if e in found or e in doc["effects"]]
-    named += [e for e in doc["effects"] + held if e not in effects and e not in named]
+    held = [h["effect"] for h in doc.get("held_by_base", [])] if doc["status"] in ("no_gap", "explained") else []
     return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
             "injected": label_of(injected), "left_out_effects": left,
-            "predicted": label_of(named) if found else predicted_label(doc), "status": doc["status"],
-            "verdict": doc["verdict"], "effects": named if found else list(doc["effects"]),
-            "conditioned": conditioned, "held_by_base": held, "explained_share": float(doc["explained_share"]),
+            "predicted": label_of(named) if named else predicted_label(doc), "status": doc["status"],
+            "verdict": doc["verdict"], "effects": named,
+            "conditioned": list(doc.get("removed_by_conditioning", [])), "held_by_base": held,
+            "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
-            "invisible": bool(effects) and doc["status"] == "no_gap" and not found}
+            "invisible": bool(effects) and doc["status"] == "no_gap" and not named}
 
 
 def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: str, title: str) -> dict:

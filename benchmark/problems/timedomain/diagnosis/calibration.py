@@ -20,6 +20,7 @@ import numpy as np
 
 from benchmark.core.effects import load_effects
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.diagnosis.named import named_effects
 from benchmark.problems.timedomain.diagnosis.pipeline import diagnose
 from benchmark.problems.timedomain.diagnosis.run import diagnosis_settings, identify_base
 from benchmark.problems.timedomain.settings import TimeDomainSettings
@@ -49,15 +50,6 @@ def diagnose_at_shares(run: Mapping, dataset: StartupDataset, identify: Callable
     return out
 
 
-def named(verdict: dict) -> set[str]:
-    """The effects a verdict names, as the blind score counts them: the chosen ones, those the
-    conditioning removed and named, and a load the base holds where the data are accounted for."""
-    out = set(verdict["effects"]) | set(verdict["removed_by_conditioning"])
-    if verdict["status"] in ("no_gap", "explained"):
-        out |= {h["effect"] for h in verdict["held_by_base"]}
-    return out
-
-
 def _rates(sets: list[dict], share: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per set at ``share``: (false selection, named exactly, channel_delay named though not
     injected, channel_delay was a candidate and not injected) as 0/1 arrays."""
@@ -65,7 +57,7 @@ def _rates(sets: list[dict], share: float) -> tuple[np.ndarray, np.ndarray, np.n
     for s in sets:
         v = next(v for v in s["verdicts"] if v["share"] == share)
         injected = set(s["injected"])
-        got = named(v) if v["status"] != "unexplained" else set()
+        got = set(named_effects(v))
         # an injected effect the base cannot see (no gap) is not a miss (the blind score leaves it out)
         seen = injected if v["status"] != "no_gap" else set()
         false.append(bool(got - injected))

@@ -1,0 +1,26 @@
+"""What a diagnosis names: the one definition the blind evaluation and the calibration score.
+
+A diagnosis names an effect in three ways: the selection chose it (``effects``), the conditioning
+on load found and removed it (``removed_by_conditioning``: channel offsets, clipped or flattened
+current peaks), or the base model holds it under another name and the document says so
+(``held_by_base``: a constant load torque as Coulomb friction), the last only where the data are
+accounted for (status ``no_gap`` or ``explained``: a load in the base's friction beside a gap
+left unexplained is no diagnosis of a load). Every name counts, whatever the status: a
+conditioning that removes an offset the record does not have names a wrong effect.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+
+def named_effects(doc: Mapping) -> list[str]:
+    """Every effect ``doc`` (a ``diagnosis.json`` document, or a verdict with its keys
+    ``status``, ``effects``, ``removed_by_conditioning``, ``held_by_base``) names, in order:
+    the conditioning's, the chosen ones, then a load the base holds."""
+    held = [h["effect"] for h in doc.get("held_by_base", [])] if doc["status"] in ("no_gap", "explained") else []
+    out: list[str] = []
+    for e in [*doc.get("removed_by_conditioning", []), *doc.get("effects", []), *held]:
+        if e not in out:
+            out.append(e)
+    return out
