@@ -58,8 +58,9 @@ def _rates(sets: list[dict], share: float) -> tuple[np.ndarray, np.ndarray, np.n
         v = next(v for v in s["verdicts"] if v["share"] == share)
         injected = set(s["injected"])
         got = set(named_effects(v))
-        # an injected effect the base cannot see (no gap) is not a miss (the blind score leaves it out)
-        seen = injected if v["status"] != "no_gap" else set()
+        # an injected effect the base cannot see (no gap) and that nothing names is not a miss (the
+        # blind score leaves such a set out); one the conditioning removed is scored
+        seen = injected if v["status"] != "no_gap" or got else set()
         false.append(bool(got - injected))
         exact.append(got == seen)
         skew_free.append("channel_delay" not in injected and s.get("skew_candidate", False))
