@@ -25,8 +25,7 @@ The same test decides everything:
 * backward: every effect of the chosen set must still earn its place beside the others
   (``M - e`` refitted from several starts), else the weakest is dropped and the check repeats.
 
-``tau`` is to be calibrated (``benchmark.studies.calibration``; not done yet, the default 0.5 is
-the smallest share it tries): the smallest share whose rate of
+``tau`` is calibrated (``benchmark.studies.calibration``, 0.3): the smallest share whose rate of
 naming an effect that was not injected, over development data with every effect in its varied
 forms, stays within the target; see ``docs/diagnosis.md``.
 """
