@@ -48,8 +48,8 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 
 from benchmark.analysis.blind_report import render, summarise, wilson  # noqa: F401  (re-exported)
 from benchmark.core.effects import load_effects
-from benchmark.problems.timedomain.diagnosis.named import named_effects
 from benchmark.core.io import write_text_atomic, write_yaml_atomic
+from benchmark.problems.timedomain.diagnosis.named import held_effects, named_effects
 
 MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
 #: Effects a time-domain base model of case 2 already holds (never an injected "effect").
@@ -311,12 +311,11 @@ def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
     left = [e for e in effects if e in alone_no_gap and e not in named]
     injected, effects = list(effects), [e for e in effects if e not in left] if len(left) < len(effects) else effects
     left = [e for e in injected if e not in effects]
-    held = [h["effect"] for h in doc.get("held_by_base", [])] if doc["status"] in ("no_gap", "explained") else []
     return {"index": index, "truth": label_of(effects), "truth_effects": list(effects),
             "injected": label_of(injected), "left_out_effects": left,
             "predicted": label_of(named) if named else predicted_label(doc), "status": doc["status"],
             "verdict": doc["verdict"], "effects": named,
-            "conditioned": list(doc.get("removed_by_conditioning", [])), "held_by_base": held,
+            "conditioned": list(doc.get("removed_by_conditioning", [])), "held_by_base": held_effects(doc),
             "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),

@@ -14,13 +14,20 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 
+def held_effects(doc: Mapping) -> list[str]:
+    """The effects the base model holds under another name (``held_by_base``) that ``doc`` names:
+    only with status ``no_gap`` or ``explained`` (module docstring)."""
+    if doc["status"] not in ("no_gap", "explained"):
+        return []
+    return [h["effect"] for h in doc.get("held_by_base", [])]
+
+
 def named_effects(doc: Mapping) -> list[str]:
     """Every effect ``doc`` (a ``diagnosis.json`` document, or a verdict with its keys
     ``status``, ``effects``, ``removed_by_conditioning``, ``held_by_base``) names, in order:
     the conditioning's, the chosen ones, then a load the base holds."""
-    held = [h["effect"] for h in doc.get("held_by_base", [])] if doc["status"] in ("no_gap", "explained") else []
     out: list[str] = []
-    for e in [*doc.get("removed_by_conditioning", []), *doc.get("effects", []), *held]:
+    for e in [*doc.get("removed_by_conditioning", []), *doc.get("effects", []), *held_effects(doc)]:
         if e not in out:
             out.append(e)
     return out
