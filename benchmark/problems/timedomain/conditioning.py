@@ -173,6 +173,13 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         said.append(f"{n_masked} current samples masked: {sum(report.n_clipped)} hard-clipped, "
                     f"{sum(report.n_saturated)} on flattened (soft-saturated) peaks")
     found = (["sensor_offset"] if removed else []) + (["current_sensor_saturation"] if n_masked else [])
+    put_back = {}  # what was removed, for the diagnosis's check of each removal (:func:`restored`)
+    if removed:
+        d_v, d_i = v - v_out, i - i_out
+        put_back["sensor_offset"] = (*clarke(d_v[0, 0], d_v[1, 0], d_v[2, 0]),
+                                     *clarke(d_i[0, 0], d_i[1, 0], -d_i[0, 0] - d_i[1, 0]))
+    if n_masked:
+        put_back["current_sensor_saturation"] = ~weight
     speed_out, speed_offset = rec.speed, 0.0
     if speed is not None and np.isfinite(report.speed_offset):
         speed_out, speed_offset = rec.speed - report.speed_offset, float(report.speed_offset)
@@ -213,7 +220,29 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
         weight=None if not n_masked else weight,
         switch_on_sample=None if steps is None else steps.steps[-1] + 1,
+        removed=put_back or None,
     ), said, found, speed_offset
+
+
+def restored(ds: StartupDataset, effect: str) -> StartupDataset:
+    """``ds`` with the conditioning's removal of ``effect`` (``sensor_offset``: the offsets are
+    added back; ``current_sensor_saturation``: the flattened or clipped samples count again) put
+    back on every record: the data the diagnosis compares with when it checks whether the removal
+    earns its place (:mod:`benchmark.problems.timedomain.diagnosis.conditioning_check`)."""
+    records = []
+    for rec in ds.startups:
+        undo = (rec.removed or {}).get(effect)
+        if undo is not None:
+            rest = {k: v for k, v in rec.removed.items() if k != effect} or None
+            if effect == "sensor_offset":
+                d_va, d_vb, d_ia, d_ib = (float(x) for x in undo)
+                rec = replace(rec, v_alpha=rec.v_alpha + d_va, v_beta=rec.v_beta + d_vb,
+                              i_alpha=rec.i_alpha + d_ia, i_beta=rec.i_beta + d_ib, removed=rest)
+            else:
+                weight = np.asarray(rec.weight, bool) | undo
+                rec = replace(rec, weight=None if weight.all() else weight, removed=rest)
+        records.append(rec)
+    return replace(ds, startups=records, conditioning_removed=[e for e in ds.conditioning_removed if e != effect])
 
 
 def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:

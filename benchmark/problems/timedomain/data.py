@@ -66,7 +66,9 @@ class StartupRecord:
     steps, whose volt-seconds the conditioning corrected from the current's response: what is
     left of their error is estimated with the parameters as a stator flux step there; None: no
     such switch-on), columns (the file's column names of ``voltage`` and ``current``, for
-    messages; None for a record made in memory).
+    messages; None for a record made in memory), removed (what the conditioning removed, to
+    put back: ``{"sensor_offset": (v_alpha, v_beta, i_alpha, i_beta) offsets, "current_sensor_saturation":
+    mask of the samples masked as flattened}``; the diagnosis checks each removal by its rule).
     """
 
     t: np.ndarray
@@ -80,6 +82,7 @@ class StartupRecord:
     weight: np.ndarray | None = None
     switch_on_sample: int | None = None
     columns: dict | None = None  # the file's columns of each quantity ("voltage": "v_r, v_s, v_t"), for messages
+    removed: dict | None = None
 
     @property
     def has_speed(self) -> bool:

@@ -17,7 +17,10 @@
 6. Forward selection, pairs, backward check (:mod:`.selection`), every decision by the one rule
    of :mod:`.rule`: an effect earns its place when the model without it is above the noise band
    and it removes at least ``diagnosis.selection_share`` of the excess that model leaves.
-7. Status (:func:`.rule.status_of`): ``no_gap``, ``explained`` (what is left is within the
+7. The conditioning's removals (offsets, masked flattened peaks) checked by the same rule
+   beside the chosen effects (:mod:`.conditioning_check`); one that does not earn its place is
+   put back and the diagnosis runs again on that record.
+8. Status (:func:`.rule.status_of`): ``no_gap``, ``explained`` (what is left is within the
    band), ``partly_explained`` (effects named, a gap left), ``unexplained`` (a gap that no
    effect earns its place against); each named effect's drop-one share, fitted parameters and
    standard errors; candidates whose held-out score is within ``band_k`` standard errors of the
@@ -30,13 +33,15 @@ which reads only ``meta.yaml`` and the record tables.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from benchmark.core.effects import Effect
 from benchmark.core.uncertainty import misfit_ratio
+from benchmark.problems.timedomain.conditioning import restored
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.diagnosis.conditioning_check import check_removals, withdrawn_line
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
@@ -179,6 +184,16 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     if sel.memo[frozenset()].chi2 > band**2 and settings.max_effects != 0:
         final, full_x, withouts, order, pruned, rounds = sel.select(candidates, sel.memo[frozenset()], band, progress)
     base_fit = sel.memo[frozenset()]  # the best base fit found (drop-one refits may have improved it)
+    checks = check_removals(ds, sel, final, band)
+    withdrawn = [r for r in checks if not r["earns"]]
+    if withdrawn:  # the record with those removals put back is the one to diagnose
+        for r in withdrawn:
+            ds = restored(ds, r["effect"])
+        ds = replace(ds, conditioning=list(ds.conditioning) + [withdrawn_line(r) for r in withdrawn])
+        doc = diagnose(ds, base_estimate, effects, settings, progress)
+        doc["conditioning_check"] = checks + doc["conditioning_check"]
+        doc["wall_time_s"] = time.perf_counter() - t0
+        return doc
     q_before, q_after = quality(base_fit.held_used), quality(final.held_used)
     status, verdict, share = status_of(q_before, q_after, order)
     if status == "no_gap":  # the best base fit found is at the noise level: nothing to name
@@ -230,10 +245,11 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "scales": {"rated_torque_Nm": ctx.T_rated, "rated_current_A": ctx.I_rated, "I2t_A2s": ctx.I2t},
         "conditioning": list(ds.conditioning),
         "removed_by_conditioning": list(ds.conditioning_removed),
+        "conditioning_check": checks,
         "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated, base_se),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
     doc["_models"] = {"base": base_fit, "final": final, "full_x": full_x, "band": q_before.threshold,
-                      "selector": sel}
+                      "selector": sel, "dataset": ds}
     return doc

@@ -178,6 +178,13 @@ def render_markdown(doc: dict) -> str:
     if doc.get("removed_by_conditioning"):
         lines.append("Found and removed by the conditioning on load (the diagnosis ran on the conditioned record): "
                      + ", ".join(doc["removed_by_conditioning"]) + ".")
+    for c in doc.get("conditioning_check", []):
+        if "excess_reduction" in c:
+            lines.append(f"The conditioning's {c['effect']} checked by the rule beside "
+                         f"{' + '.join(c['effects_beside']) or 'the base'}: removing it takes "
+                         f"{100 * c['excess_reduction']:.0f} % of the excess held-out chi^2 "
+                         f"({c['heldout_chi2_put_back']:.4g} -> {c['heldout_chi2']:.4g}): "
+                         + ("named." if c["earns"] else "withdrawn, the record diagnosed with it put back."))
     lines += base_identification_lines(doc.get("base_identification"))
     lines += ["", "## Where the base model misses", "",
               f"chi^2 per held-out residual: {loc['chi2_per_residual']:.3f}", "",

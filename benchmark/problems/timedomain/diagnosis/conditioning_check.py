@@ -1,0 +1,60 @@
+"""The conditioning's removals, checked by the one rule of :mod:`.rule`.
+
+The conditioning on load (:mod:`benchmark.problems.timedomain.conditioning`) removes channel
+offsets and masks flattened current peaks by its own tests on part of the record (a pre-trigger,
+a steady tail, the peaks' shape). Such a test can be fooled: coloured noise or a current
+transformer's remanence moves a short pre-trigger's mean by more than three of its estimated
+standard errors, and an offset removed from the whole record then puts a bias into all of it.
+So the diagnosis names a removal only when it earns its place by the same rule as every effect:
+the final model (base plus the chosen effects) is refitted on the record with the removal put
+back (:func:`~benchmark.problems.timedomain.conditioning.restored`), and the removal earns its
+place when that model is above the noise band and the removal takes at least the rule's share
+of the excess it leaves. A removal that does not is withdrawn, and the diagnosis runs again on
+the record with it put back (:func:`.pipeline.diagnose`). Where the selection chose the effect of
+the same name beside the removal (an offset left on another channel), the name stands either way
+and is not checked.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from benchmark.problems.timedomain.conditioning import restored
+from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData
+from benchmark.problems.timedomain.diagnosis.folds import segment_folds
+from benchmark.problems.timedomain.diagnosis.rule import share_removed
+from benchmark.problems.timedomain.diagnosis.selection import FOLDS, Selector, SetFit
+
+
+def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float) -> list[dict]:
+    """One row per effect the conditioning removed from ``ds``: the held-out chi^2 of ``final``'s
+    effect set refitted with the removal put back (same noise levels), ``final``'s own, the share
+    of the excess the removal takes and whether it earns its place (module docstring). Fits are
+    kept on ``sel`` (``sel.removal_fits``): the calibration asks again at other shares."""
+    rows = []
+    cache = sel.__dict__.setdefault("removal_fits", {})
+    for name in ds.conditioning_removed:
+        if name in final.names:  # the selection chose the effect itself beside the removal: named either way
+            rows.append({"effect": name, "effects_beside": list(final.names), "chosen_too": True, "earns": True})
+            continue
+        key = (name, frozenset(final.names))
+        if key not in cache:
+            data = replace(DiagnosisData.from_dataset(restored(ds, name)), noise=sel.data.noise)
+            masks = dict(zip(FOLDS, segment_folds(data), strict=True))
+            other = Selector(data, sel.settings, sel.ctx, sel.centre, sel.fc_scale, masks, sel.rule, sel.order)
+            cache[key] = other.fit(final.effects, [(final, [final])]).chi2
+        without = cache[key]
+        rows.append({"effect": name, "effects_beside": list(final.names), "heldout_chi2_put_back": without,
+                     "heldout_chi2": final.chi2, "excess_reduction": share_removed(without, final.chi2),
+                     "earns": sel.rule.earns(without, final.chi2, band)})
+    return rows
+
+
+def withdrawn_line(row: dict) -> str:
+    """The conditioning's report line of a removal the rule withdrew."""
+    what = {"sensor_offset": "offsets put back", "current_sensor_saturation": "masked samples count again"}
+    return (f"{row['effect']} withdrawn ({what.get(row['effect'], 'put back')}): the model fits the record "
+            f"about as well without the removal (held-out chi^2 {row['heldout_chi2_put_back']:.4g} with it put "
+            f"back, {row['heldout_chi2']:.4g} removed: {100 * row['excess_reduction']:.0f} % of the excess, "
+            "below the rule's share or within the noise band)")
