@@ -31,7 +31,9 @@ def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float
     """One row per effect the conditioning removed from ``ds``: the held-out chi^2 of ``final``'s
     effect set refitted with the removal put back (same noise levels), ``final``'s own, the share
     of the excess the removal takes and whether it earns its place (module docstring). Fits are
-    kept on ``sel`` (``sel.removal_fits``): the calibration asks again at other shares."""
+    kept on ``sel`` (``sel.removal_fits``: a selector of the record with each removal put back,
+    :func:`selector_for`): the calibration asks again at other shares, and the diagnosis of the
+    record with a withdrawn removal put back goes on from there."""
     rows = []
     cache = sel.__dict__.setdefault("removal_fits", {})
     for name in ds.conditioning_removed:
@@ -40,15 +42,22 @@ def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float
             continue
         key = (name, frozenset(final.names))
         if key not in cache:
-            data = replace(DiagnosisData.from_dataset(restored(ds, name)), noise=sel.data.noise)
-            masks = dict(zip(FOLDS, segment_folds(data), strict=True))
-            other = Selector(data, sel.settings, sel.ctx, sel.centre, sel.fc_scale, masks, sel.rule, sel.order)
-            cache[key] = other.fit(final.effects, [(final, [final])]).chi2
-        without = cache[key]
+            cache[key] = selector_for(restored(ds, name), sel)
+        without = cache[key].fit(final.effects, [(final, [final])]).chi2  # kept in its memo
         rows.append({"effect": name, "effects_beside": list(final.names), "heldout_chi2_put_back": without,
                      "heldout_chi2": final.chi2, "excess_reduction": share_removed(without, final.chi2),
                      "earns": sel.rule.earns(without, final.chi2, band)})
     return rows
+
+
+def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
+    """A selector of ``ds`` (the record with removals put back) with ``sel``'s noise levels,
+    scales, settings and rule, so that its held-out chi^2 compare with ``sel``'s."""
+    data = replace(DiagnosisData.from_dataset(ds), noise=sel.data.noise)
+    masks = dict(zip(FOLDS, segment_folds(data), strict=True))
+    other = Selector(data, sel.settings, sel.ctx, sel.centre, sel.fc_scale, masks, sel.rule, sel.order)
+    other.input_noise = sel.input_noise
+    return other
 
 
 def withdrawn_line(row: dict) -> str:

@@ -41,7 +41,7 @@ from benchmark.core.effects import Effect
 from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.conditioning import restored
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.diagnosis.conditioning_check import check_removals, withdrawn_line
+from benchmark.problems.timedomain.diagnosis.conditioning_check import check_removals, selector_for, withdrawn_line
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
@@ -141,10 +141,12 @@ def _parameters(model: JointModel, x: np.ndarray, se: np.ndarray, j: int) -> dic
 
 
 def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[str, Effect],
-             settings: DiagnosisSettings, progress=None, selector: Selector | None = None) -> dict:
-    """Steps 2-7 from a base estimate; returns the diagnosis document (no truth). ``selector``:
+             settings: DiagnosisSettings, progress=None, selector: Selector | None = None,
+             warm: SetFit | None = None) -> dict:
+    """Steps 2-8 from a base estimate; returns the diagnosis document (no truth). ``selector``:
     one made by an earlier call on the same data (its fits are reused; the calibration study
-    runs the rule at several shares this way)."""
+    runs the rule at several shares this way). ``warm``: the set chosen on the record before a
+    conditioning removal was withdrawn; the selection grows from it (step 7)."""
     t0 = time.perf_counter()
     data = DiagnosisData.from_dataset(ds)
     facts = {**ds.facts(), **data.facts(settings.base_case)}
@@ -182,15 +184,19 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     candidates, excluded = screen(effects, facts)
     final, full_x, withouts, order, pruned, rounds = sel.memo[frozenset()], None, {}, [], [], []
     if sel.memo[frozenset()].chi2 > band**2 and settings.max_effects != 0:
-        final, full_x, withouts, order, pruned, rounds = sel.select(candidates, sel.memo[frozenset()], band, progress)
+        start = sel.fit(warm.effects, [(warm, [warm])]) if warm is not None and warm.names else None
+        final, full_x, withouts, order, pruned, rounds = sel.select(candidates, sel.memo[frozenset()], band, progress,
+                                                                   start)
     base_fit = sel.memo[frozenset()]  # the best base fit found (drop-one refits may have improved it)
     checks = check_removals(ds, sel, final, band)
     withdrawn = [r for r in checks if not r["earns"]]
-    if withdrawn:  # the record with those removals put back is the one to diagnose
+    if withdrawn:  # the record with those removals put back is the one to diagnose, from the set chosen
         for r in withdrawn:
             ds = restored(ds, r["effect"])
         ds = replace(ds, conditioning=list(ds.conditioning) + [withdrawn_line(r) for r in withdrawn])
-        doc = diagnose(ds, base_estimate, effects, settings, progress)
+        again = (sel.removal_fits[(withdrawn[0]["effect"], frozenset(final.names))] if len(withdrawn) == 1
+                 else selector_for(ds, sel))
+        doc = diagnose(ds, base_estimate, effects, settings, progress, selector=again, warm=final)
         doc["conditioning_check"] = checks + doc["conditioning_check"]
         doc["wall_time_s"] = time.perf_counter() - t0
         return doc
