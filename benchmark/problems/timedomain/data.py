@@ -124,7 +124,7 @@ class StartupDataset:
         where it is stated.
     conditioning : what the conditioning on load did (plain-English lines for report.md).
     conditioning_removed : the effects it found and removed (``sensor_offset``,
-        ``current_sensor_saturation``): the diagnosis lists them, the blind scores count them.
+        ``current_sensor_saturation``): the diagnosis checks each by its rule and lists those kept.
     """
 
     pole_pairs: int

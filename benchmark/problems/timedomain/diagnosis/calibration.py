@@ -41,9 +41,7 @@ def diagnose_at_shares(run: Mapping, dataset: StartupDataset, identify: Callable
     for share in sorted(shares):
         doc = diagnose(ds, base, effects, dataclasses.replace(settings, selection_share=float(share)),
                        selector=selector)
-        # the record diagnosed (a conditioning removal withdrawn at a smaller share is withdrawn
-        # at a larger one too) and its fits, for the next share
-        selector, ds = doc["_models"]["selector"], doc["_models"]["dataset"]
+        selector = doc["_models"]["selector"]
         out.append({"share": float(share), "status": doc["status"], "effects": doc["effects"],
                     "held_by_base": doc["held_by_base"], "removed_by_conditioning": doc["removed_by_conditioning"],
                     "gap_before": doc["gap_before"]["heldout_rms_over_noise"],

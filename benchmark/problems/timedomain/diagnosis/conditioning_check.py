@@ -4,15 +4,17 @@ The conditioning on load (:mod:`benchmark.problems.timedomain.conditioning`) rem
 offsets and masks flattened current peaks by its own tests on part of the record (a pre-trigger,
 a steady tail, the peaks' shape). Such a test can be fooled: coloured noise or a current
 transformer's remanence moves a short pre-trigger's mean by more than three of its estimated
-standard errors, and an offset removed from the whole record then puts a bias into all of it.
-So the diagnosis names a removal only when it earns its place by the same rule as every effect:
-the final model (base plus the chosen effects) is refitted on the record with the removal put
-back (:func:`~benchmark.problems.timedomain.conditioning.restored`), and the removal earns its
-place when that model is above the noise band and the removal takes at least the rule's share
-of the excess it leaves. A removal that does not is withdrawn, and the diagnosis runs again on
-the record with it put back (:func:`.pipeline.diagnose`). Where the selection chose the effect of
-the same name beside the removal (an offset left on another channel), the name stands either way
-and is not checked.
+standard errors, and a main-saturated machine's own currents can look like a probe's flattened
+peaks. So the diagnosis names a removal only when it earns its place by the same rule as every
+effect: the final model (base plus the chosen effects) is refitted on the record with the
+removal put back (:func:`~benchmark.problems.timedomain.conditioning.restored`), and the removal
+earns its place when that model is above the noise band and the removal takes at least the
+rule's share of the excess it leaves. One that does not is not named; the models stay fitted to
+the conditioned record, as the identification's are (putting a real removal back where a large
+gap is left, on a bench record with offsets and saturating probes, made the final model worse:
+its stator resistance four times the identification's). Where the selection chose the effect of
+the same name beside the removal (an offset left on another channel), the name stands either
+way and is not checked.
 """
 
 from __future__ import annotations
@@ -32,8 +34,7 @@ def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float
     effect set refitted with the removal put back (same noise levels), ``final``'s own, the share
     of the excess the removal takes and whether it earns its place (module docstring). Fits are
     kept on ``sel`` (``sel.removal_fits``: a selector of the record with each removal put back,
-    :func:`selector_for`): the calibration asks again at other shares, and the diagnosis of the
-    record with a withdrawn removal put back goes on from there."""
+    :func:`selector_for`): the calibration asks again at other shares."""
     rows = []
     cache = sel.__dict__.setdefault("removal_fits", {})
     for name in ds.conditioning_removed:
@@ -60,10 +61,10 @@ def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
     return other
 
 
-def withdrawn_line(row: dict) -> str:
-    """The conditioning's report line of a removal the rule withdrew."""
-    what = {"sensor_offset": "offsets put back", "current_sensor_saturation": "masked samples count again"}
-    return (f"{row['effect']} withdrawn ({what.get(row['effect'], 'put back')}): the model fits the record "
-            f"about as well without the removal (held-out chi^2 {row['heldout_chi2_put_back']:.4g} with it put "
-            f"back, {row['heldout_chi2']:.4g} removed: {100 * row['excess_reduction']:.0f} % of the excess, "
-            "below the rule's share or within the noise band)")
+def unnamed_line(row: dict) -> str:
+    """The report line of a removal the rule does not name."""
+    what = {"sensor_offset": "the offsets", "current_sensor_saturation": "the masked samples"}
+    return (f"{row['effect']} removed on load but not named: the model fits the record about as well with "
+            f"{what.get(row['effect'], 'it')} put back (held-out chi^2 {row['heldout_chi2_put_back']:.4g}, "
+            f"{row['heldout_chi2']:.4g} removed: {100 * row['excess_reduction']:.0f} % of the excess, below the "
+            "rule's share or within the noise band); the diagnosis ran on the conditioned record")

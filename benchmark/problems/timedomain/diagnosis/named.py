@@ -1,12 +1,13 @@
 """What a diagnosis names: the one definition the blind evaluation and the calibration score.
 
-A diagnosis names an effect in three ways: the selection chose it (``effects``), the conditioning
-on load found and removed it (``removed_by_conditioning``: channel offsets, clipped or flattened
-current peaks), or the base model holds it under another name and the document says so
-(``held_by_base``: a constant load torque as Coulomb friction), the last only where the data are
-accounted for (status ``no_gap`` or ``explained``: a load in the base's friction beside a gap
-left unexplained is no diagnosis of a load). Every name counts, whatever the status: a
-conditioning that removes an offset the record does not have names a wrong effect.
+A diagnosis names an effect in three ways: the selection chose it (``effects``), the
+conditioning on load found and removed it and the rule kept the removal
+(``removed_by_conditioning``: channel offsets, clipped or flattened current peaks;
+:mod:`.conditioning_check`), or the base model holds it under another name and the document
+says so (``held_by_base``: a constant load torque as Coulomb friction), the last only where the
+data are accounted for (status ``no_gap`` or ``explained``: a load in the base's friction beside
+a gap left unexplained is no diagnosis of a load). Every name counts, whatever the status: a
+kept removal of an offset the record does not have names a wrong effect.
 """
 
 from __future__ import annotations

@@ -18,8 +18,8 @@
    of :mod:`.rule`: an effect earns its place when the model without it is above the noise band
    and it removes at least ``diagnosis.selection_share`` of the excess that model leaves.
 7. The conditioning's removals (offsets, masked flattened peaks) checked by the same rule
-   beside the chosen effects (:mod:`.conditioning_check`); one that does not earn its place is
-   put back and the diagnosis runs again on that record.
+   beside the chosen effects (:mod:`.conditioning_check`): one is named only when it earns its
+   place; the models stay fitted to the conditioned record.
 8. Status (:func:`.rule.status_of`): ``no_gap``, ``explained`` (what is left is within the
    band), ``partly_explained`` (effects named, a gap left), ``unexplained`` (a gap that no
    effect earns its place against); each named effect's drop-one share, fitted parameters and
@@ -33,15 +33,14 @@ which reads only ``meta.yaml`` and the record tables.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from benchmark.core.effects import Effect
 from benchmark.core.uncertainty import misfit_ratio
-from benchmark.problems.timedomain.conditioning import restored
 from benchmark.problems.timedomain.data import StartupDataset
-from benchmark.problems.timedomain.diagnosis.conditioning_check import check_removals, selector_for, withdrawn_line
+from benchmark.problems.timedomain.diagnosis.conditioning_check import check_removals, unnamed_line
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
@@ -141,12 +140,10 @@ def _parameters(model: JointModel, x: np.ndarray, se: np.ndarray, j: int) -> dic
 
 
 def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[str, Effect],
-             settings: DiagnosisSettings, progress=None, selector: Selector | None = None,
-             warm: SetFit | None = None) -> dict:
+             settings: DiagnosisSettings, progress=None, selector: Selector | None = None) -> dict:
     """Steps 2-8 from a base estimate; returns the diagnosis document (no truth). ``selector``:
     one made by an earlier call on the same data (its fits are reused; the calibration study
-    runs the rule at several shares this way). ``warm``: the set chosen on the record before a
-    conditioning removal was withdrawn; the selection grows from it (step 7)."""
+    runs the rule at several shares this way)."""
     t0 = time.perf_counter()
     data = DiagnosisData.from_dataset(ds)
     facts = {**ds.facts(), **data.facts(settings.base_case)}
@@ -184,22 +181,10 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     candidates, excluded = screen(effects, facts)
     final, full_x, withouts, order, pruned, rounds = sel.memo[frozenset()], None, {}, [], [], []
     if sel.memo[frozenset()].chi2 > band**2 and settings.max_effects != 0:
-        start = sel.fit(warm.effects, [(warm, [warm])]) if warm is not None and warm.names else None
-        final, full_x, withouts, order, pruned, rounds = sel.select(candidates, sel.memo[frozenset()], band, progress,
-                                                                   start)
+        final, full_x, withouts, order, pruned, rounds = sel.select(candidates, sel.memo[frozenset()], band, progress)
     base_fit = sel.memo[frozenset()]  # the best base fit found (drop-one refits may have improved it)
-    checks = check_removals(ds, sel, final, band)
-    withdrawn = [r for r in checks if not r["earns"]]
-    if withdrawn:  # the record with those removals put back is the one to diagnose, from the set chosen
-        for r in withdrawn:
-            ds = restored(ds, r["effect"])
-        ds = replace(ds, conditioning=list(ds.conditioning) + [withdrawn_line(r) for r in withdrawn])
-        again = (sel.removal_fits[(withdrawn[0]["effect"], frozenset(final.names))] if len(withdrawn) == 1
-                 else selector_for(ds, sel))
-        doc = diagnose(ds, base_estimate, effects, settings, progress, selector=again, warm=final)
-        doc["conditioning_check"] = checks + doc["conditioning_check"]
-        doc["wall_time_s"] = time.perf_counter() - t0
-        return doc
+    checks = check_removals(ds, sel, final, band)  # the conditioning's removals, named only when they earn
+    unnamed = [r for r in checks if not r["earns"]]
     q_before, q_after = quality(base_fit.held_used), quality(final.held_used)
     status, verdict, share = status_of(q_before, q_after, order)
     if status == "no_gap":  # the best base fit found is at the noise level: nothing to name
@@ -249,13 +234,13 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "voltage_noise": input_noise,
         "facts": {k: v for k, v in facts.items() if k != "nameplate"},
         "scales": {"rated_torque_Nm": ctx.T_rated, "rated_current_A": ctx.I_rated, "I2t_A2s": ctx.I2t},
-        "conditioning": list(ds.conditioning),
-        "removed_by_conditioning": list(ds.conditioning_removed),
+        "conditioning": list(ds.conditioning) + [unnamed_line(r) for r in unnamed],
+        "removed_by_conditioning": [e for e in ds.conditioning_removed if e not in {r["effect"] for r in unnamed}],
         "conditioning_check": checks,
         "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated, base_se),
         "settings": dict(settings.__dict__),
         "wall_time_s": time.perf_counter() - t0,
     }
     doc["_models"] = {"base": base_fit, "final": final, "full_x": full_x, "band": q_before.threshold,
-                      "selector": sel, "dataset": ds}
+                      "selector": sel}
     return doc

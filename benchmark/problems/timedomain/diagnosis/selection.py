@@ -364,15 +364,12 @@ class Selector:
             cur = withouts[least]
         return cur, {}, pruned
 
-    def select(self, candidates, base_fit: SetFit, band: float, progress=None, start: SetFit | None = None):
+    def select(self, candidates, base_fit: SetFit, band: float, progress=None):
         """Forward selection, the backward check, and forward again without what was dropped,
-        until the backward check drops nothing. ``start``: a set to grow from instead of the base
-        (the set chosen on the record before a conditioning removal was withdrawn; its effects
-        face the backward check as any). Returns (final fit, its fit on all data or None, the
-        drop-one fits by name, the chosen names in order of selection, names pruned, rounds)."""
-        rounds, pruned = [], []
-        order = list(start.names) if start is not None else []
-        cur, pool = start if start is not None else base_fit, list(candidates)
+        until the backward check drops nothing. Returns (final fit, its fit on all data or None,
+        the drop-one fits by name, the chosen names in order of selection, names pruned, rounds)."""
+        rounds, order, pruned = [], [], []
+        cur, pool = base_fit, list(candidates)
         full_x, withouts, checked = None, {}, None
         while True:
             done = len(rounds)
