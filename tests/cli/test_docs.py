@@ -23,4 +23,5 @@ def test_the_docs_build_without_warnings(tmp_path):
                  "Write an identification to a MATLAB"):
         assert text in api, text
     # the docstrings' Sphinx roles render as code, not as ":func:" before it
-    assert not re.search(r":(func|class|meth|mod|data|attr):", api), re.findall(r".{40}:(?:func|class|meth|mod):.{40}", api)
+    assert not re.search(r":(func|class|meth|mod|data|attr):", api), \
+        re.findall(r".{40}:(?:func|class|meth|mod):.{40}", api)

@@ -23,7 +23,8 @@ def sets():
                       verdict(0.6, "explained", ["double_cage"])]},
         {"injected": ["load_torque"], "skew_candidate": False,
          "verdicts": [verdict(0.3, "explained", held=["load_torque"]),
-                      verdict(0.6, "partly_explained", held=["load_torque"])]},  # a held load counts only when explained
+                      # a held load counts only when explained
+                      verdict(0.6, "partly_explained", held=["load_torque"])]},
         {"injected": ["main_saturation", "two_mass"],
          "verdicts": [verdict(0.3, "explained", ["main_saturation", "two_mass", "iron_loss"]),
                       verdict(0.6, "unexplained", removed=["sensor_offset"])]},  # the conditioning's name counts
@@ -60,7 +61,8 @@ def test_the_blind_score_and_the_calibration_count_the_same_names():
 
     free = score_row(0, [], doc("no_gap", removed=["sensor_offset"]))
     assert (free["predicted"], free["invisible"]) == ("sensor_offset", False)
-    extra = score_row(1, ["main_saturation"], doc("partly_explained", ["main_saturation"], ["current_sensor_saturation"]))
+    extra = score_row(1, ["main_saturation"],
+                      doc("partly_explained", ["main_saturation"], ["current_sensor_saturation"]))
     assert extra["predicted"] == "current_sensor_saturation+main_saturation"
     found = score_row(2, ["sensor_offset"], doc("unexplained", removed=["sensor_offset"]))
     assert found["predicted"] == "sensor_offset"

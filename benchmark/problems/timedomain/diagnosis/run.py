@@ -184,7 +184,8 @@ def render_markdown(doc: dict) -> str:
                          f"{' + '.join(c['effects_beside']) or 'the base'}: removing it takes "
                          f"{100 * c['excess_reduction']:.0f} % of the excess held-out chi^2 "
                          f"({c['heldout_chi2_put_back']:.4g} -> {c['heldout_chi2']:.4g}): "
-                         + ("named." if c["earns"] else "not named (the models stay fitted to the conditioned record)."))
+                         + ("named." if c["earns"] else "not named (the models stay fitted to the conditioned "
+                                                        "record)."))
     lines += base_identification_lines(doc.get("base_identification"))
     lines += ["", "## Where the base model misses", "",
               f"chi^2 per held-out residual: {loc['chi2_per_residual']:.3f}", "",
