@@ -35,8 +35,7 @@ def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float
     of the excess the removal takes and whether it earns its place (module docstring). Fits are
     kept on ``sel`` (``sel.removal_fits``: a selector of the record with each removal put back,
     :func:`selector_for`): the calibration asks again at other shares."""
-    rows = []
-    cache = sel.__dict__.setdefault("removal_fits", {})
+    rows, cache = [], sel.removal_fits
     for name in ds.conditioning_removed:
         if name in final.names:  # the selection chose the effect itself beside the removal: named either way
             rows.append({"effect": name, "effects_beside": list(final.names), "chosen_too": True, "earns": True})

@@ -84,6 +84,7 @@ class Selector:
         self.refitted: set = set()  # (set, its sources' sets) already refitted: a refit from them again is the same
         self.base_full: np.ndarray | None = None  # the base fitted on all data (set by the pipeline)
         self.input_noise = None  # what the measured voltage's noise adds to each channel (the pipeline's)
+        self.removal_fits: dict = {}  # (removal, set) -> selector of the record with it put back (conditioning_check)
         labels = data.channel_labels()
         used = masks["A"] | masks["B"]
         lab = labels[used]
