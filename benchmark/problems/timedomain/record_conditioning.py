@@ -34,6 +34,8 @@ from benchmark.problems.timedomain.switch_on import (
 )
 
 MIN_PRETRIGGER = 50  #: samples a pre-trigger needs before its mean is used as the offset
+#: samples left out before the switch-on when a pre-trigger's mean is taken (the contactor's first arcs)
+PRETRIGGER_GUARD = 3
 
 
 def estimate_frequency(x, ts: float, tail_s: float | None = None) -> float:
@@ -99,7 +101,7 @@ def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
 
 
 def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None, *,
-                     tail_s: float | None = None, n_harmonics: int = 7, guard: int = 3,
+                     tail_s: float | None = None, n_harmonics: int = 7, guard: int = PRETRIGGER_GUARD,
                      mask=None, f0_from=None) -> tuple[float, str, float]:
     """DC offset of one channel (units of ``x``), how it was found, and its standard error:
     :func:`long_run_std` over the square root of the samples averaged, the long-run spread

@@ -180,8 +180,8 @@ def render_markdown(doc: dict) -> str:
                      + ", ".join(doc["removed_by_conditioning"]) + ".")
     for c in doc.get("conditioning_check", []):
         if "excess_reduction" in c:
-            lines.append(f"The conditioning's {c['effect']} checked by the rule beside "
-                         f"{' + '.join(c['effects_beside']) or 'the base'}: removing it takes "
+            where = c.get("where") or f"beside {' + '.join(c['effects_beside']) or 'the base'}"
+            lines.append(f"The conditioning's {c['effect']} checked by the rule {where}: removing it takes "
                          f"{100 * c['excess_reduction']:.0f} % of the excess held-out chi^2 "
                          f"({c['heldout_chi2_put_back']:.4g} -> {c['heldout_chi2']:.4g}): "
                          + ("named." if c["earns"] else "not named (the models stay fitted to the conditioned "
