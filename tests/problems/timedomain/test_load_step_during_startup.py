@@ -9,11 +9,12 @@ beside the grid's: ``load_torque``, explained (6.34 -> 0.98 on the blind set).""
 
 from __future__ import annotations
 
-import pytest
+from tests.conftest import diagnose_with, stored_set
 
-from tests.conftest import diagnose_with
-
-# motulator blind seed 45, set 32: the 2.2 kW example machine spread by the draw, a six-step start
+# motulator blind seed 45, set 32: the 2.2 kW example machine spread by the draw, a six-step start.
+# The record is stored (tests/data/motulator_blind45_set32, see its README.md): motulator takes
+# four minutes to make it, its 23 s free stop most of that; it was made by
+# make_motulator_dataset(MOTOR, "six_step", {"load_torque": STEP}, NOISE, 298262428, folder, 0.5, 12000.0, True)
 MOTOR = {"name": "blind45_set32", "pole_pairs": 2, "voltage": 400.0, "frequency": 50.0, "rated_power": 2200.0,
          "parameters": {"Rs": 3.391149472101035, "Ls": 0.24755586049181844, "Le": 0.02434372911182061,
                         "Rr": 2.003895900226593, "J": 0.013672744908320794, "fv": 0.00043174359996410184,
@@ -24,12 +25,7 @@ NOISE = {"current_std": 0.09113198587807662, "current_colored_std": 0.0453818467
 
 
 def test_a_load_step_during_a_motulator_start_up_is_named(tmp_path):
-    pytest.importorskip("motulator")
-    from synthetic.motulator_source import make_motulator_dataset
-
-    folder = tmp_path / "set"
-    make_motulator_dataset(MOTOR, "six_step", {"load_torque": STEP}, NOISE, 298262428, folder, 0.5, 12000.0, True)
-    (folder / "truth.yaml").unlink()
+    folder = stored_set("motulator_blind45_set32", tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque"])
     gap = (doc["gap_before"]["heldout_rms_over_noise"], doc["gap_after"]["heldout_rms_over_noise"])
     step = doc["per_effect"][0]["parameters"] if doc["effects"] else {}

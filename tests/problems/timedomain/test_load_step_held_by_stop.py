@@ -11,12 +11,13 @@ starts with the base's friction above a motor's own moved into the step
 
 from __future__ import annotations
 
-import pytest
-
-from tests.conftest import diagnose_with
+from tests.conftest import diagnose_with, stored_set
 
 # motulator blind seed 51, set 22 (the draw as rows.jsonl records it): the preset 1 kW motor
-# spread by the draw, a six-step start, a 0.73 N m step at 0.164 s, on through the stop
+# spread by the draw, a six-step start, a 0.73 N m step at 0.164 s, on through the stop. The
+# record is stored (tests/data/motulator_blind51_set22, see its README.md): motulator takes
+# minutes to make it; it was made by
+# make_motulator_dataset(MOTOR, "six_step", {"load_torque": STEP}, NOISE, 53869196, folder, 0.5, 12000.0, True)
 MOTOR = {"parameters": {"Rs": 4.3353680867925775, "Ls": 0.10725417825304943, "Le": 0.009536544054008817,
                         "Rr": 1.7334943513101373, "J": 0.006661245244928131, "fv": 0.000297854834552906,
                         "fc": 0.04297},
@@ -27,12 +28,7 @@ NOISE = {"current_std": 0.05701416926622967, "current_colored_std": 0.0323156466
 
 
 def test_a_load_step_the_stop_reads_as_friction_is_named_not_a_double_cage(tmp_path):
-    pytest.importorskip("motulator")
-    from synthetic.motulator_source import make_motulator_dataset
-
-    folder = tmp_path / "set"
-    make_motulator_dataset(MOTOR, "six_step", {"load_torque": STEP}, NOISE, 53869196, folder, 0.5, 12000.0, True)
-    (folder / "truth.yaml").unlink()
+    folder = stored_set("motulator_blind51_set22", tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "double_cage", "iron_loss", "speed_sensor_gain"])
     gap = (doc["gap_before"]["heldout_rms_over_noise"], doc["gap_after"]["heldout_rms_over_noise"])
     base = doc["base"]["estimate"]
