@@ -25,15 +25,6 @@ there, with the noise band of that segment. Beside a large gap (a bench record w
 coupling, 120 times the noise left) a real offset takes almost nothing of the whole record's
 excess and would go unnamed; at rest it is what there is to see. A mean that is noise (a short
 pre-trigger of coloured noise, a fifth of a sigma) is not visible per sample and is not named.
-
-**Masked peaks.** The flattened current peaks the conditioning masked are checked on those
-samples (:func:`masked_peaks_row`): each is predicted by the final model fitted on the other
-fold (its held-out prediction, as in the score), with and without a probe's compression
-``L tanh(i / L)`` on the phase currents, ``L`` fitted to the other fold's masked samples. A probe
-that compresses the peaks leaves residuals there that the compression takes away, whatever gap
-the rest of the record holds; a machine whose own currents are peaky (main saturation) is
-under-predicted there, and a compression cannot help. Judged on the whole record beside a gap
-of 120 times the noise, real compressed peaks took 1 % of its excess.
 """
 
 from __future__ import annotations
@@ -41,7 +32,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from benchmark.core.uncertainty import misfit_ratio
 from benchmark.problems.timedomain.conditioning import restored
@@ -50,7 +40,6 @@ from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_nois
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.rule import share_removed
 from benchmark.problems.timedomain.diagnosis.selection import FOLDS, Selector, SetFit
-from benchmark.problems.timedomain.frames import clarke, inverse_clarke
 
 
 def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float) -> list[dict]:
@@ -65,8 +54,6 @@ def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float
             rows.append({"effect": name, "effects_beside": list(final.names), "chosen_too": True, "earns": True})
             continue
         rest = at_rest_row(ds, sel) if name == "sensor_offset" else None
-        if name == "current_sensor_saturation":
-            rest = masked_peaks_row(ds, sel, final)
         if rest is not None:
             rows.append({"effect": name, "effects_beside": list(final.names), **rest})
             continue
@@ -115,68 +102,6 @@ def at_rest_row(ds: StartupDataset, sel: Selector) -> dict | None:
             "earns": sel.rule.earns(s_without, s_with, rest_band)}
 
 
-def masked_peaks_row(ds: StartupDataset, sel: Selector, final: SetFit) -> dict | None:
-    """The rule's check of the masked current peaks (module docstring), or None where there is
-    no mask on the one start-up record: the held-out chi^2 per residual of the masked samples
-    (both currents, whitened by their noise estimates) as ``final`` predicts them
-    (``heldout_chi2_put_back``) and through a compression fitted on the other fold
-    (``heldout_chi2``), the share of the excess, and whether the removal earns its place against
-    the noise band of those samples."""
-    mask = (ds.startups[0].removed or {}).get("current_sensor_saturation") if len(ds.startups) == 1 else None
-    if mask is None or not np.any(mask):
-        return None
-    back = selector_for(restored(ds, "current_sensor_saturation"), sel)
-    model, data = back.model(final.effects), back.data
-    n = data.n_startup
-    if len(mask) != n:
-        return None
-    predicted = {f: model.simulate(final.xs[other][None, :])[0][: 2 * n].reshape(2, n)
-                 for f, other in (("A", "B"), ("B", "A"))}  # fold f's held-out prediction
-    in_a = back.masks["A"][:n]
-    y = np.where(in_a, predicted["A"], predicted["B"])[:, mask]
-    meas = data.meas[:2, mask]
-    sigma = np.array([data.noise["i_alpha"].std, data.noise["i_beta"].std])[:, None]
-    fold_a = in_a[mask]
-    u_fit = {f: _compression(y[:, sel_], meas[:, sel_], sigma) for f, sel_ in (("A", fold_a), ("B", ~fold_a))}
-    held = np.where(fold_a, (meas - _compressed(y, u_fit["B"])) / sigma, (meas - _compressed(y, u_fit["A"])) / sigma)
-    raw = (meas - y) / sigma
-    noise = data.noise["i_alpha"]
-    band = misfit_ratio(held.ravel(), unit_noise(noise.rel_uncertainty, noise.n_effective),
-                        k=sel.settings.band_k, bias_floor=sel.settings.band_floor).threshold
-    s_without, s_with = float(np.mean(raw**2)), float(np.mean(held**2))
-    return {"where": f"on the {int(mask.sum())} masked samples, held out, with a probe's compression fitted",
-            "heldout_chi2_put_back": s_without, "heldout_chi2": s_with, "band": band,
-            "compression_limit_a": [None if u == 0 else float(1.0 / u) for u in (u_fit["A"], u_fit["B"])],
-            "excess_reduction": share_removed(s_without, s_with), "earns": sel.rule.earns(s_without, s_with, band)}
-
-
-def _compressed(i_ab: np.ndarray, u: float) -> np.ndarray:
-    """Alpha-beta currents (2, m) as two phase probes (R, S) read them when each compresses as
-    ``tanh(u i) / u`` (``u = 1 / L``, 1/A; 0: no compression)."""
-    if u <= 0:
-        return i_ab
-    i_r, i_s, _ = inverse_clarke(i_ab[0], i_ab[1])
-    r, s = np.tanh(u * i_r) / u, np.tanh(u * i_s) / u
-    return np.vstack(clarke(r, s, -r - s))
-
-
-def _compression(y: np.ndarray, meas: np.ndarray, sigma: np.ndarray) -> float:
-    """``u`` (1/A) of the compression that brings the predictions ``y`` closest to ``meas``
-    (whitened least squares), from none (0) to a limit of a third of the largest predicted
-    phase current."""
-    if y.size == 0:
-        return 0.0
-    peak = float(np.max(np.abs(inverse_clarke(y[0], y[1]))))
-    if not peak > 0:
-        return 0.0
-
-    def ssr(u):
-        return float(np.sum(((meas - _compressed(y, u)) / sigma) ** 2))
-
-    best = minimize_scalar(ssr, bounds=(0.0, 3.0 / peak), method="bounded", options={"xatol": 1e-4 / peak})
-    return float(best.x) if best.fun < ssr(0.0) else 0.0
-
-
 def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
     """A selector of ``ds`` (the record with removals put back) with ``sel``'s noise levels,
     scales, settings and rule, so that its held-out chi^2 compare with ``sel``'s."""
@@ -190,10 +115,8 @@ def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
 def unnamed_line(row: dict) -> str:
     """The report line of a removal the rule does not name."""
     what = {"sensor_offset": "the offsets", "current_sensor_saturation": "the masked samples"}
-    numbers = (f"(held-out chi^2 {row['heldout_chi2_put_back']:.4g}, {row['heldout_chi2']:.4g} removed: "
-               f"{100 * row['excess_reduction']:.0f} % of the excess, below the rule's share or within the noise band)")
-    if "where" in row:
-        how = f"checked {row['where']}, removing it makes little difference {numbers}"
-    else:
-        how = f"the model fits the record about as well with {what.get(row['effect'], 'it')} put back {numbers}"
-    return f"{row['effect']} removed on load but not named: {how}; the diagnosis ran on the conditioned record"
+    where = "the record at rest is within the noise" if "where" in row else "the model fits the record about as well"
+    return (f"{row['effect']} removed on load but not named: {where} with "
+            f"{what.get(row['effect'], 'it')} put back (held-out chi^2 {row['heldout_chi2_put_back']:.4g}, "
+            f"{row['heldout_chi2']:.4g} removed: {100 * row['excess_reduction']:.0f} % of the excess, below the "
+            "rule's share or within the noise band); the diagnosis ran on the conditioned record")
