@@ -43,8 +43,11 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import PRETRIGGER_GUARD, condition_record
+from benchmark.problems.timedomain.record_conditioning import condition_record, pretrigger_segment
 from benchmark.problems.timedomain.switch_on import SwitchingSteps, sampled_volt_seconds, switching_steps
+
+#: Key of ``StartupRecord.removed`` holding the pre-trigger samples the offsets were measured on.
+AT_REST = "sensor_offset_at_rest"
 
 #: An offset is removed only when it exceeds this fraction of its channel's amplitude.
 OFFSET_SIGNIFICANCE = 1e-3
@@ -145,15 +148,14 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
                     "(its last supply periods still change)")
         offsets = {name: (0.0, unit, how, se) for name, (value, unit, how, se) in offsets.items()}
     v_out, i_out = v.copy(), i.copy()
-    at_rest = {}  # channel -> its pre-trigger samples, where an offset removed was their mean
+    at_rest = {}  # channel -> its pre-trigger samples (None: the offset came from the steady tail)
     for row, name in enumerate(("v_r", "v_s", "v_t")):
         value, unit, how, se = offsets[name]
         amplitude = np.sqrt(2.0) * np.std(v[row, n // 2:])
         if measured_voltage and significant(value, se, amplitude):
             v_out[row] -= value
             removed.append(f"{name} {value:+.2f} V ({how.split(' over ')[0]})")
-            if how.startswith("pre-trigger"):
-                at_rest[name] = v[row, :report.switch_on - PRETRIGGER_GUARD].copy()
+            at_rest[name] = pretrigger_segment(v[row], report.switch_on)
         else:
             kept.append(f"{name} {value:+.3g} +- {se:.2g} V")
     for row, name in enumerate(("i_r", "i_s")):
@@ -162,8 +164,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         if significant(value, se, amplitude):
             i_out[row] -= value
             removed.append(f"{name} {value:+.3f} A ({how.split(' over ')[0]})")
-            if how.startswith("pre-trigger"):
-                at_rest[name] = i[row, :report.switch_on - PRETRIGGER_GUARD].copy()
+            at_rest[name] = pretrigger_segment(i[row], report.switch_on)
         else:
             kept.append(f"{name} {value:+.3g} +- {se:.2g} A")
     if removed:
@@ -183,8 +184,9 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         d_v, d_i = v - v_out, i - i_out
         put_back["sensor_offset"] = (*clarke(d_v[0, 0], d_v[1, 0], d_v[2, 0]),
                                      *clarke(d_i[0, 0], d_i[1, 0], -d_i[0, 0] - d_i[1, 0]))
+        at_rest = {k: x.copy() for k, x in at_rest.items() if x is not None}
         if at_rest:  # the pre-trigger the offsets were measured on: the diagnosis checks them there
-            put_back["sensor_offset_at_rest"] = at_rest
+            put_back[AT_REST] = at_rest
     if n_masked:
         put_back["current_sensor_saturation"] = ~weight
     speed_out, speed_offset = rec.speed, 0.0
@@ -240,7 +242,7 @@ def restored(ds: StartupDataset, effect: str) -> StartupDataset:
     for rec in ds.startups:
         undo = (rec.removed or {}).get(effect)
         if undo is not None:
-            rest = {k: v for k, v in rec.removed.items() if k.split('_at_rest')[0] != effect} or None
+            rest = {k: v for k, v in rec.removed.items() if k not in (effect, f"{effect}_at_rest")} or None
             if effect == "sensor_offset":
                 d_va, d_vb, d_ia, d_ib = (float(x) for x in undo)
                 rec = replace(rec, v_alpha=rec.v_alpha + d_va, v_beta=rec.v_beta + d_vb,

@@ -100,6 +100,14 @@ def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
     return float(max(math.sqrt(L * np.var(means, ddof=1)), np.std(e)))
 
 
+def pretrigger_segment(x, pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> np.ndarray | None:
+    """The samples of ``x`` before a switch-on at ``pretrigger_end`` less ``guard``, when there
+    are at least :data:`MIN_PRETRIGGER` of them (the segment whose mean is the offset), else None."""
+    if pretrigger_end is None or pretrigger_end - guard < MIN_PRETRIGGER:
+        return None
+    return np.asarray(x)[..., :pretrigger_end - guard]
+
+
 def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None, *,
                      tail_s: float | None = None, n_harmonics: int = 7, guard: int = PRETRIGGER_GUARD,
                      mask=None, f0_from=None) -> tuple[float, str, float]:
@@ -124,8 +132,8 @@ def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None,
     """
     x = np.asarray(x, dtype=float).ravel()
     mask = None if mask is None else np.asarray(mask, bool)
-    if pretrigger_end is not None and pretrigger_end - guard >= MIN_PRETRIGGER:
-        seg = x[:pretrigger_end - guard]
+    seg = pretrigger_segment(x, pretrigger_end, guard)
+    if seg is not None:
         if mask is not None:
             seg = seg[~mask[:pretrigger_end - guard]]
         spread = long_run_std(seg)

@@ -34,7 +34,7 @@ from dataclasses import replace
 import numpy as np
 
 from benchmark.core.uncertainty import misfit_ratio
-from benchmark.problems.timedomain.conditioning import restored
+from benchmark.problems.timedomain.conditioning import AT_REST, restored
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_noise
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
@@ -74,7 +74,7 @@ def at_rest_row(ds: StartupDataset, sel: Selector) -> dict | None:
     removed (``heldout_chi2``: each half less the other half's mean), the share of the excess
     and whether the removal earns its place there (against the segment's own noise band: the
     whole record's is another segment's). Only ``sel``'s settings and rule are used."""
-    pieces = [(rec.removed or {}).get("sensor_offset_at_rest") for rec in ds.startups
+    pieces = [(rec.removed or {}).get(AT_REST) for rec in ds.startups
               if "sensor_offset" in (rec.removed or {})]
     if not pieces or any(p is None for p in pieces):
         return None
