@@ -64,6 +64,11 @@ def significant(value: float, standard_error: float, amplitude: float) -> bool:
 #: A record shorter than this many supply periods is not conditioned (too short to tell).
 MIN_PERIODS = 3.0
 
+#: A record whose supply period is shorter than 1/this many samples is not conditioned: its
+#: switch-on, offsets and peaks cannot be told from the waveform (a frequency estimated from the
+#: zero crossings of samples that alternate in sign is the sampling's, not a supply's).
+MAX_PERIOD_FRACTION = 0.25
+
 
 #: The tail is steady when the RMS current of its supply periods varies by less than this.
 STEADY_TOLERANCE = 0.02
@@ -132,6 +137,9 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
             return rec, [f"not conditioned ({type(exc).__name__}: {exc})"], [], 0.0
     if not np.isfinite(report.f0) or report.f0 <= 0 or n * ts * report.f0 < MIN_PERIODS:
         return rec, ["not conditioned: fewer than three supply periods"], [], 0.0
+    if report.f0 * ts > MAX_PERIOD_FRACTION:  # a supply the sampling does not resolve: nothing to trim by
+        return rec, [f"not conditioned: a supply of {report.f0:.4g} Hz has fewer than {1 / MAX_PERIOD_FRACTION:.0f} "
+                     f"samples per period"], [], 0.0
     said = [f"supply frequency {report.f0:.3f} Hz ({report.f0_source})"]
     first = cond.first
     if report.switch_on is not None:

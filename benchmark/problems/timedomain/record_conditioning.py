@@ -79,7 +79,10 @@ def _tail_fit_offset(x, ts, f0, n_harmonics, mask):
         c, s = np.cos(2 * np.pi * h * f0 * t), np.sin(2 * np.pi * h * f0 * t)
         cols += [c, s, tc * c, tc * s]
     A = np.column_stack(cols)
-    keep = ~mask if mask is not None else slice(None)
+    keep = ~mask if mask is not None else np.ones(n, bool)
+    if int(np.count_nonzero(keep)) <= A.shape[1]:
+        raise ValueError(f"estimate_offsets: {int(np.count_nonzero(keep))} unmasked samples in the tail, "
+                         f"too few for its fit's {A.shape[1]} coefficients")
     coef = np.linalg.lstsq(A[keep], x[keep], rcond=None)[0]
     return float(coef[0]), x[keep] - A[keep] @ coef
 
