@@ -163,6 +163,21 @@ class Effect:
         evaluated in one batch before the local fit. None (default): the starts as they are."""
         return None
 
+    #: Index among the extras of the size that :meth:`start_grid`'s values are judged at: each
+    #: grid value with that size at its best (one linearised step from the start's size, the
+    #: prior of :meth:`prior_residuals` included), so that the grid does not prefer a value
+    #: where the start's size changes least. None: the grid is judged at the start's size.
+    grid_size: int | None = None
+
+    def prior_residuals(self, extras: np.ndarray, ctx: EffectContext) -> np.ndarray:
+        """Weak prior residuals (n, m) of extra-parameter rows (n, k) toward the effect's absence,
+        added to every fit's residuals: ``(value - absent value) / width`` with the width the
+        largest realistic size. Beside the thousands of noise-whitened residuals of a record
+        they decide nothing the data can see; an extra the fitted fold cannot see (a load
+        switched on where only the other fold has samples) has no other gradient and goes to
+        its absence instead of staying at its start. None by default (m = 0)."""
+        return np.zeros((len(extras), 0))
+
     def augment(self, rows: np.ndarray, extras: np.ndarray, ctx: EffectContext) -> np.ndarray:
         """Rows (n, N_EXT) of the augmented model for extra-parameter rows (n, k). Returns a
         copy; it edits only this effect's own fields (so that effects combine)."""

@@ -100,22 +100,36 @@ class LoadTorque(Effect):
         return starts
 
     def starts_from_base(self, base, ctx):
-        """A step load that stays on through the coast-down brakes the stop record as Coulomb
-        friction does, so the stop's pre-identification puts it into the base's ``fc`` (own
-        blind seed 49 set 38: a 0.50 N m step at 0.42 of the record, read as ``fc`` 0.55 N m
-        against the motor's 0.04), and a step started at zero on top of that friction only adds
-        torque the start-up before the step does not have (chosen second, behind a double cage
-        that soaked up the pre-step misfit). One start with the friction above
-        :data:`OWN_FRICTION_SHARE` of the rated torque moved into the step, at the first step
-        start's instant (the start grid then moves it)."""
-        fc, scale = float(base.get("fc", 0.0)), ctx.torque_scale
-        own = OWN_FRICTION_SHARE * ctx.T_rated
-        if scale <= 0 or ctx.T_rated <= 0 or fc <= 2.0 * own:
+        """A load that stays on through the coast-down brakes the stop record as friction does,
+        so the stop's pre-identification puts it into the base's friction, and a step started at
+        zero on top of that friction only adds torque the start-up before the step does not have
+        (chosen second, behind a double cage that soaked up the pre-step misfit). A constant step
+        is read as Coulomb friction ``fc`` (own blind seed 49 set 38: a 0.50 N m step at 0.42 of
+        the record, read as ``fc`` 0.55 N m against the motor's 0.04); a DC generator on its
+        resistor, whose torque follows speed, as viscous friction ``fv`` (motulator, blind seed
+        399 set 18: 1.9 N m at synchronous speed from 0.21 s, read as ``fv w_sync`` 0.99 N m).
+        One start for each friction above :data:`OWN_FRICTION_SHARE` of the rated torque (``fv``
+        at synchronous speed), moved into the step (the DC generator's: all of it following
+        speed), at the first step start's instant (the start grid then moves it)."""
+        scale, own = ctx.torque_scale, OWN_FRICTION_SHARE * ctx.T_rated
+        if scale <= 0 or ctx.T_rated <= 0:
             return []
         lo, hi = self.extra_bounds(ctx)
-        step = next(s for s in self.extra_starts(ctx) if s[2] > 0).copy()
-        step[2] = float(np.clip((fc - own) / scale, lo[2], hi[2]))
-        return [({"fc": own}, step)]
+        first = next(s for s in self.extra_starts(ctx) if s[2] > 0)
+        out = []
+        fc = float(base.get("fc", 0.0))
+        if fc > 2.0 * own:
+            step = first.copy()
+            step[2] = float(np.clip((fc - own) / scale, lo[2], hi[2]))
+            out.append(({"fc": own}, step))
+        w_sync = max(ctx.w_sync, 1e-9)
+        viscous = float(base.get("fv", 0.0)) * w_sync
+        if viscous > 2.0 * own:
+            step = first.copy()
+            step[2] = float(np.clip((viscous - own) / scale, lo[2], hi[2]))
+            step[4], step[5] = 1.0, float(np.clip(0.02, lo[5], hi[5]))
+            out.append(({"fv": own / w_sync}, step))
+        return out
 
     def start_grid(self, ctx):
         """The switch-on instant (fraction of the record) every half supply period: from afar the
@@ -126,6 +140,13 @@ class LoadTorque(Effect):
         half_period = math.pi / max(ctx.w_e, 1e-9)
         n = int(np.clip(ctx.record_duration / half_period, 8, 400))
         return 3, np.linspace(lo[3], hi[3], n)
+
+    grid_size = 2  # the switched torque, judged at its best at each instant of the grid
+
+    def prior_residuals(self, extras, ctx):
+        """The three torques (constant, quadratic, switched) toward no load, each over the
+        largest realistic load (``realistic[1]``, of the torque scale)."""
+        return np.asarray(extras, float)[:, :3] / self.realistic[1]
 
     def augment(self, rows, extras, ctx):
         rows = rows.copy()

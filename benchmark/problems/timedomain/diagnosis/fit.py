@@ -327,8 +327,11 @@ class JointModel:
         def to_x(u):
             return lo + np.clip(u, 0.0, 1.0) * span
 
+        def objective(X):  # the data's residuals on ``mask`` and the effects' priors
+            return np.concatenate([self.residuals(X)[:, sel], self.prior(X)], axis=1)
+
         def fun(u):
-            r = self.residuals(to_x(u)[None, :])[0][sel]
+            r = objective(to_x(u)[None, :])[0]
             cache["u"], cache["r"] = u.copy(), r
             return r
 
@@ -336,7 +339,7 @@ class JointModel:
             r0 = cache["r"] if "u" in cache and np.array_equal(cache["u"], u) else fun(u)
             h = 1e-6 * np.maximum(np.abs(u), 1e-3)
             h = np.where(u + h > 1.0, -h, h)
-            R = self.residuals(to_x(u[None, :] + np.diag(h)))[:, sel]
+            R = objective(to_x(u[None, :] + np.diag(h)))
             return ((R - r0[None, :]) / h[:, None]).T
 
         u0 = np.clip((np.clip(x0, lo, hi) - lo) / span, 0.0, 1.0)
@@ -345,9 +348,20 @@ class JointModel:
                                          xtol=tol, ftol=tol, gtol=1e-8, max_nfev=max_iterations)
         return to_x(sol.x)
 
+    def prior(self, X: np.ndarray) -> np.ndarray:
+        """The effects' prior residuals (n, m) toward their absence (:meth:`Effect.prior_residuals`),
+        part of what every fit minimises, not of any held-out score."""
+        X = np.atleast_2d(X)
+        return np.concatenate([np.zeros((len(X), 0))] + [eff.prior_residuals(X[:, s], self.ctx)
+                                                        for eff, s in zip(self.effects, self.slices, strict=True)],
+                              axis=1)
+
     def ssr(self, x: np.ndarray, mask: np.ndarray | None = None) -> float:
-        r = self.residuals(np.atleast_2d(x))[0]
-        return float(np.sum(r[mask] ** 2) if mask is not None else np.sum(r**2))
+        """What :meth:`fit` minimises at ``x``: the squared residuals on ``mask`` (all when None)
+        and the effects' priors."""
+        x = np.atleast_2d(x)
+        r = self.residuals(x)[0]
+        return float((np.sum(r[mask] ** 2) if mask is not None else np.sum(r**2)) + np.sum(self.prior(x) ** 2))
 
     def standard_errors(self, x: np.ndarray) -> np.ndarray:
         """Standard errors of ``x`` (a fit on all residuals) from the coloured-residual
