@@ -318,8 +318,8 @@ class JointModel:
 
     def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_iterations: int = 12,
             tol: float = 1e-5) -> np.ndarray:
-        """Local least squares from ``x0`` on the residuals in ``mask`` (all when None)."""
-        sel = slice(None) if mask is None else mask
+        """Local least squares from ``x0`` of :meth:`objective`: the residuals in ``mask`` (all when
+        None) and the effects' priors."""
         lo, hi = self.lower, self.upper
         span = np.where(hi > lo, hi - lo, 1.0)
         cache: dict = {}
@@ -327,11 +327,8 @@ class JointModel:
         def to_x(u):
             return lo + np.clip(u, 0.0, 1.0) * span
 
-        def objective(X):  # the data's residuals on ``mask`` and the effects' priors
-            return np.concatenate([self.residuals(X)[:, sel], self.prior(X)], axis=1)
-
         def fun(u):
-            r = objective(to_x(u)[None, :])[0]
+            r = self.objective(to_x(u)[None, :], mask)[0]
             cache["u"], cache["r"] = u.copy(), r
             return r
 
@@ -339,7 +336,7 @@ class JointModel:
             r0 = cache["r"] if "u" in cache and np.array_equal(cache["u"], u) else fun(u)
             h = 1e-6 * np.maximum(np.abs(u), 1e-3)
             h = np.where(u + h > 1.0, -h, h)
-            R = objective(to_x(u[None, :] + np.diag(h)))
+            R = self.objective(to_x(u[None, :] + np.diag(h)), mask)
             return ((R - r0[None, :]) / h[:, None]).T
 
         u0 = np.clip((np.clip(x0, lo, hi) - lo) / span, 0.0, 1.0)
@@ -355,6 +352,12 @@ class JointModel:
         return np.concatenate([np.zeros((len(X), 0))] + [eff.prior_residuals(X[:, s], self.ctx)
                                                         for eff, s in zip(self.effects, self.slices, strict=True)],
                               axis=1)
+
+    def objective(self, X: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+        """What :meth:`fit` makes small, per row of ``X`` (n, m): the residuals on ``mask`` (all
+        when None) followed by the effects' priors (:meth:`prior`)."""
+        X = np.atleast_2d(X)
+        return np.concatenate([self.residuals(X)[:, slice(None) if mask is None else mask], self.prior(X)], axis=1)
 
     def ssr(self, x: np.ndarray, mask: np.ndarray | None = None) -> float:
         """What :meth:`fit` minimises at ``x``: the squared residuals on ``mask`` (all when None)

@@ -401,12 +401,7 @@ class Selector:
 def _batched_ssr(model: JointModel, X: np.ndarray, mask) -> np.ndarray:
     """What the fits minimise (:meth:`JointModel.ssr`) at every row of ``X``, simulated 64 rows
     at a time."""
-    return np.concatenate([np.sum(_objective(model, X[k:k + 64], mask) ** 2, axis=1) for k in range(0, len(X), 64)])
-
-
-def _objective(model: JointModel, X: np.ndarray, mask) -> np.ndarray:
-    """The residuals on ``mask`` and the effects' priors of the rows ``X``."""
-    return np.concatenate([model.residuals(X)[:, mask], model.prior(X)], axis=1)
+    return np.concatenate([np.sum(model.objective(X[k:k + 64], mask) ** 2, axis=1) for k in range(0, len(X), 64)])
 
 
 def _sized(model: JointModel, X: np.ndarray, mask, col: int) -> np.ndarray:
@@ -419,7 +414,7 @@ def _sized(model: JointModel, X: np.ndarray, mask, col: int) -> np.ndarray:
     out = X.copy()
     for k in range(0, len(X), 64):
         rows = slice(k, k + 64)
-        a, b = _objective(model, X[rows], mask), _objective(model, X1[rows], mask)
+        a, b = model.objective(X[rows], mask), model.objective(X1[rows], mask)
         d = (b - a) / (X1[rows, col] - X[rows, col])[:, None]
         dd = np.sum(d * d, axis=1)
         step = np.where(dd > 0, -np.sum(a * d, axis=1) / np.where(dd > 0, dd, 1.0), 0.0)
