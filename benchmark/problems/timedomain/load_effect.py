@@ -50,6 +50,8 @@ class LoadTorque(Effect):
     #: Longest rise of a switched load, s: a DC machine's armature circuit (L_a/R, 5-100 ms with
     #: its load resistor), a contactor-switched brake.
     MAX_RISE = 0.2
+    #: Rise time constant, s, a DC generator's starts begin at (the middle of its 5-100 ms).
+    DC_RISE_START = 0.02
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
@@ -93,10 +95,10 @@ class LoadTorque(Effect):
             lo, hi = self.extra_bounds(ctx)
             on = float(np.clip(change / ctx.record_duration, lo[3], hi[3]))
             starts.insert(0, np.array([0.0, 0.0, 0.2, on, 0.0, ts, 1.0]))
-            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, 1.0]))  # a DC machine loaded there
+            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, self.DC_RISE_START, 1.0]))  # a DC machine loaded there
             if ctx.load_release is not None:  # ... and switched off where the envelope falls most
                 off = float(np.clip(ctx.load_release / ctx.record_duration, on, 1.0))
-                starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, 0.02, off]))
+                starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, self.DC_RISE_START, off]))
         return starts
 
     def starts_from_base(self, base, ctx):
@@ -127,7 +129,7 @@ class LoadTorque(Effect):
         if viscous > 2.0 * own:
             step = first.copy()
             step[2] = float(np.clip((viscous - own) / scale, lo[2], hi[2]))
-            step[4], step[5] = 1.0, float(np.clip(0.02, lo[5], hi[5]))
+            step[4], step[5] = 1.0, float(np.clip(self.DC_RISE_START, lo[5], hi[5]))
             out.append(({"fv": own / w_sync}, step))
         return out
 

@@ -321,11 +321,12 @@ class JointModel:
         """Local least squares from ``x0`` of :meth:`objective`: the residuals in ``mask`` (all when
         None) and the effects' priors."""
         lo, hi = self.lower, self.upper
-        span = np.where(hi > lo, hi - lo, 1.0)
+        width = np.maximum(hi - lo, 0.0)  # 0: a parameter held at its bound
+        span = np.where(width > 0, width, 1.0)
         cache: dict = {}
 
         def to_x(u):
-            return lo + np.clip(u, 0.0, 1.0) * span
+            return lo + np.clip(u, 0.0, 1.0) * width
 
         def fun(u):
             r = self.objective(to_x(u)[None, :], mask)[0]
