@@ -136,3 +136,17 @@ def test_score_tests_rank_the_injected_effect_first_and_predict_the_fits(offset_
         assert fitted - 0.1 * held < row["heldout_chi2"] < row["heldout_chi2_at_start"], (name, row, fitted)
     offset = rows[0]
     assert abs(offset["heldout_chi2"] - offset["predicted_heldout_chi2"]) < 0.1 * held, offset
+
+
+def test_a_fit_holds_a_parameter_whose_bounds_coincide(offset_record):
+    """The folds' shared instant (``Selector.held_at``) is held by bounds that coincide: the
+    fit must leave it there (a zero-width box once let it move by up to 1 in its units)."""
+    data, ctx, fcs = offset_record
+    model = JointModel(data, 2, [], ctx, TRUE, fcs)
+    x0 = np.array([TRUE[n] for n in model.base_names]) * 1.05
+    k = model.base_names.index("Rs")
+    model.lower[k] = model.upper[k] = x0[k]
+    x = model.fit(x0, None, 20)
+    assert x[k] == x0[k]
+    assert np.all(x >= model.lower) and np.all(x <= model.upper)
+    assert model.ssr(x) < model.ssr(x0)  # the others moved
