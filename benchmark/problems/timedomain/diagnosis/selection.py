@@ -7,8 +7,8 @@ starting values, the starts that move part of the base into it, an instant chose
 and for a drop-one model also the base identification's point with the other effects' fitted
 extras (not only parameters co-adapted to the effect that was dropped). Every start is fitted
 briefly (``DiagnosisSettings.screen_iterations``), the one that ends lowest on the fold's own
-samples on to convergence (``max_iterations`` is a safety cap). An instant (an effect's grid
-parameter) is one fact of the record for both folds (:meth:`Selector.agreed`). Then each fold
+samples on to convergence (``max_iterations`` is a safety cap). A fold that cannot place an
+instant (an effect's grid parameter) takes the other fold's (:meth:`Selector.agreed`). Then each fold
 is refitted from the other fold's point where that point fits it better
 (:meth:`Selector.cross_start`: both folds minimise the same model's residuals, and a fold left
 in a worse basin would charge its misfit to the model).
