@@ -30,6 +30,7 @@ from scipy import optimize
 
 from benchmark.core.effects import Effect, EffectContext
 from benchmark.problems.timedomain.diagnosis.fit import JointModel
+from benchmark.problems.timedomain.diagnosis.grid import grid_column
 
 #: Fractions of the Gauss-Newton step whose models are evaluated (the best on the fitted fold kept).
 STEP_FRACTIONS = (1.0, 0.5, 0.25)
@@ -49,12 +50,8 @@ def first_starts(model: JointModel, x_fit: np.ndarray, new: Sequence[Effect], ct
 def _grid_columns(model: JointModel, new_from: int, ctx: EffectContext) -> list[int]:
     """Indices of the new effects' grid parameters (:meth:`Effect.start_grid`: instants a local
     step cannot move well), held in the step."""
-    cols = []
-    for j in range(new_from, len(model.effects)):
-        grid = model.effects[j].start_grid(ctx)
-        if grid is not None:
-            cols.append(model.slices[j].start + grid[0])
-    return cols
+    return [grid_column(model, j, ctx) for j in range(new_from, len(model.effects))
+            if model.effects[j].start_grid(ctx) is not None]
 
 
 def _to_x(model: JointModel, U: np.ndarray) -> np.ndarray:

@@ -37,6 +37,7 @@ import numpy as np
 from benchmark.core.effects import Effect
 from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
+from benchmark.problems.timedomain.diagnosis.grid import grid_column, on_grid
 from benchmark.problems.timedomain.diagnosis.rule import Rule, score_difference, share_removed
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 
@@ -198,7 +199,7 @@ class Selector:
         for j, eff in enumerate(model.effects):
             if eff.start_grid(self.ctx) is None:
                 continue
-            col = _grid_column(model, j, self.ctx)
+            col = grid_column(model, j, self.ctx)
             if xs["A"][col] == xs["B"][col]:
                 continue
             options = []
@@ -213,8 +214,8 @@ class Selector:
     def held_at(self, model: JointModel, xs: dict, j: int, at: float, fold: str) -> np.ndarray:
         """Fold ``fold``'s fit with ``model.effects[j]``'s grid parameter held at ``at``
         (:meth:`agreed`), from its own fit ``xs[fold]`` and the other fold's, each moved there
-        (:meth:`on_grid`); ``xs[fold]`` itself where it already holds ``at``."""
-        col = _grid_column(model, j, self.ctx)
+        (:func:`.grid.on_grid`); ``xs[fold]`` itself where it already holds ``at``."""
+        col = grid_column(model, j, self.ctx)
         if xs[fold][col] == at:
             return xs[fold]
         held = copy.copy(model)
@@ -222,40 +223,15 @@ class Selector:
         held.lower[col] = held.upper[col] = at
         other = xs["B" if fold == "A" else "A"]
         name = model.effects[j].name
-        starts = [self.on_grid(held, x, self.masks[fold], [j], {name: at}) for x in (xs[fold], other)]
+        starts = [on_grid(held, x, self.masks[fold], [j], self.ctx, {name: at}) for x in (xs[fold], other)]
         return self.best(held, starts, self.masks[fold])
-
-    def on_grid(self, model: JointModel, x0, mask, effects, values=None) -> np.ndarray:
-        """``x0`` with the grid parameter of each of ``effects`` (indices into ``model.effects``)
-        set to the grid value (``values[name]`` when given, else :meth:`Effect.start_grid`'s)
-        that fits ``mask`` best, all values evaluated in one batch. Where the effect names a size
-        (:attr:`Effect.grid_size`), each value is also judged with that size at its best
-        (:func:`_sized`): judged at the start's size alone, an instant is best where that size
-        changes least (independent plant, a DC generator loaded from the start and read by the
-        base as viscous friction: a step of the start's size at 0.949 s, inside the other fold's
-        last block). ``x0`` as it was wins ties."""
-        x = np.asarray(x0, float)
-        for j in effects:
-            eff = model.effects[j]
-            col = _grid_column(model, j, self.ctx)
-            grid = np.atleast_1d(values[eff.name] if values else eff.start_grid(self.ctx)[1])
-            X = np.repeat(x[None, :], len(grid) + 1, axis=0)
-            X[1:, col] = grid
-            X = np.clip(X, model.lower, model.upper)
-            if eff.grid_size is not None:
-                sized, ssr = _sized(model, X, mask, model.slices[j].start + eff.grid_size)
-                X, ssr = np.vstack([X, sized]), np.concatenate([ssr, _batched_ssr(model, sized, mask)])
-            else:
-                ssr = _batched_ssr(model, X, mask)
-            x = X[int(np.argmin(ssr))]
-        return x
 
     def profiled(self, model: JointModel, starts, mask, effects) -> list[np.ndarray]:
         """``starts`` with the grid parameter of each of ``effects`` (indices into
         ``model.effects``) that has one (:meth:`Effect.start_grid`) set to the grid value that
-        fits ``mask`` best (:meth:`on_grid`), followed by the starts as they were."""
+        fits ``mask`` best (:func:`.grid.on_grid`), followed by the starts as they were."""
         effects = [j for j in effects if model.effects[j].start_grid(self.ctx) is not None]
-        moved = [self.on_grid(model, x0, mask, effects) for x0 in starts] if effects else []
+        moved = [on_grid(model, x0, mask, effects, self.ctx) for x0 in starts] if effects else []
         return _distinct(moved + [np.asarray(x0, float) for x0 in starts])
 
     def cross_start(self, sf: SetFit, points=()) -> SetFit:
@@ -452,38 +428,6 @@ class Selector:
                 cur, full_x = self.with_full_fit(cur)
         order = [n for n in order if n in cur.names]
         return cur, full_x, withouts, order, pruned, rounds
-
-
-def _batched_ssr(model: JointModel, X: np.ndarray, mask) -> np.ndarray:
-    """What the fits minimise (:meth:`JointModel.ssr`) at every row of ``X``, simulated 64 rows
-    at a time."""
-    return np.concatenate([np.sum(model.objective(X[k:k + 64], mask) ** 2, axis=1) for k in range(0, len(X), 64)])
-
-
-def _sized(model: JointModel, X: np.ndarray, mask, col: int) -> tuple[np.ndarray, np.ndarray]:
-    """Each row of ``X`` with its parameter ``col`` (a size) moved to its best by one
-    linearised step of what the fits minimise (forward difference), within its bounds; and
-    what the fits minimise at the rows of ``X`` (:func:`_batched_ssr`), computed on the way."""
-    lo, hi = model.lower[col], model.upper[col]
-    h = 1e-3 * (hi - lo)
-    X1 = X.copy()
-    X1[:, col] = np.where(X[:, col] + h > hi, X[:, col] - h, X[:, col] + h)
-    out = X.copy()
-    ssr = np.empty(len(X))
-    for k in range(0, len(X), 64):
-        rows = slice(k, k + 64)
-        a, b = model.objective(X[rows], mask), model.objective(X1[rows], mask)
-        ssr[rows] = np.sum(a * a, axis=1)
-        d = (b - a) / (X1[rows, col] - X[rows, col])[:, None]
-        dd = np.sum(d * d, axis=1)
-        step = np.where(dd > 0, -np.sum(a * d, axis=1) / np.where(dd > 0, dd, 1.0), 0.0)
-        out[rows, col] = np.clip(X[rows, col] + step, lo, hi)
-    return out, ssr
-
-
-def _grid_column(model: JointModel, j: int, ctx) -> int:
-    """The column of ``model.effects[j]``'s grid parameter (:meth:`Effect.start_grid`)."""
-    return model.slices[j].start + model.effects[j].start_grid(ctx)[0]
 
 
 def _distinct(xs) -> list[np.ndarray]:
