@@ -6,8 +6,8 @@ a 1.40 s PWM start of the 7.5 kW motor. The instant lies inside a block of fold 
 samples cannot place it: with the draw's identification seed (400) fold B's fits put it at
 0.58 s, the load's held-out chi^2 was 425.7 against the base's 452.4 and the record stayed
 ``unexplained`` (with seed 0 fold B happened to land near 0.46 s). Where the folds' instants
-lie more than a grid step apart, each fold is now refitted with the instant held at the other's
-and the instant both folds fit better in sum is kept (``Selector.agreed``).
+differ, each fold is now refitted with the instant held at the other's, and the fold that cannot
+place it (its own chi^2 rises by at most ``band_k``^2) takes the other's (``Selector.agreed``).
 """
 
 from __future__ import annotations
