@@ -317,19 +317,26 @@ class JointModel:
         return r
 
     def fit(self, x0: np.ndarray, mask: np.ndarray | None, max_iterations: int = 12,
-            tol: float = 1e-5) -> np.ndarray:
+            tol: float = 1e-5, held: dict[int, float] | None = None) -> np.ndarray:
         """Local least squares from ``x0`` of :meth:`objective`: the residuals in ``mask`` (all when
-        None) and the effects' priors."""
-        lo, hi = self.lower, self.upper
-        width = np.maximum(hi - lo, 0.0)  # 0: a parameter held at its bound
-        span = np.where(width > 0, width, 1.0)
+        None) and the effects' priors. ``held`` maps parameter indices to values held fixed; a
+        parameter whose bounds coincide is held at them too. Held parameters take no part in the
+        fit (no Jacobian column, no simulation)."""
+        lo, hi = self.lower.copy(), self.upper.copy()
+        for k, value in (held or {}).items():
+            lo[k] = hi[k] = value
+        free = np.flatnonzero(hi > lo)
+        x_held = np.clip(np.asarray(x0, float), lo, hi)
+        lo_f, width = lo[free], hi[free] - lo[free]
         cache: dict = {}
 
-        def to_x(u):
-            return lo + np.clip(u, 0.0, 1.0) * width
+        def to_x(U):
+            X = np.repeat(x_held[None, :], len(U), axis=0)
+            X[:, free] = lo_f + np.clip(U, 0.0, 1.0) * width
+            return X
 
         def fun(u):
-            r = self.objective(to_x(u)[None, :], mask)[0]
+            r = self.objective(to_x(u[None, :]), mask)[0]
             cache["u"], cache["r"] = u.copy(), r
             return r
 
@@ -340,11 +347,13 @@ class JointModel:
             R = self.objective(to_x(u[None, :] + np.diag(h)), mask)
             return ((R - r0[None, :]) / h[:, None]).T
 
-        u0 = np.clip((np.clip(x0, lo, hi) - lo) / span, 0.0, 1.0)
+        if not len(free):
+            return x_held
+        u0 = (x_held[free] - lo_f) / width
         with quiet():
             sol = optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale="jac",
                                          xtol=tol, ftol=tol, gtol=1e-8, max_nfev=max_iterations)
-        return to_x(sol.x)
+        return to_x(sol.x[None, :])[0]
 
     def prior(self, X: np.ndarray) -> np.ndarray:
         """The effects' prior residuals (n, m) toward their absence (:meth:`Effect.prior_residuals`),

@@ -29,7 +29,6 @@ selection resumes.
 
 from __future__ import annotations
 
-import copy
 import itertools
 
 import numpy as np
@@ -131,14 +130,15 @@ class Selector:
         self.memo[key] = sf
         return sf
 
-    def best(self, model: JointModel, starts, mask) -> np.ndarray:
+    def best(self, model: JointModel, starts, mask, held: dict[int, float] | None = None) -> np.ndarray:
         """Every start fitted briefly (``screen_iterations``); the one that ends lowest on
-        ``mask``'s samples fitted on to convergence."""
+        ``mask``'s samples fitted on to convergence (``held``: parameters held, as
+        :meth:`JointModel.fit`)."""
         starts = _distinct(starts)
         if len(starts) > 1:
-            legs = [model.fit(x0, mask, self.settings.screen_iterations) for x0 in starts]
+            legs = [model.fit(x0, mask, self.settings.screen_iterations, held=held) for x0 in starts]
             starts = [min(legs, key=lambda x: model.ssr(x, mask))]
-        return model.fit(starts[0], mask, self.settings.max_iterations)
+        return model.fit(starts[0], mask, self.settings.max_iterations, held=held)
 
     def composed(self, model: JointModel, base_from: SetFit, extras_from, fold: str) -> list[np.ndarray]:
         """Starts of ``model`` on ``fold``: ``base_from``'s base parameters, each effect's extras
@@ -196,6 +196,7 @@ class Selector:
         set 31, a DC generator on from the start: fold B paid 339 for fold A's instant, load and
         sensor offset 2.07 against the load alone's 1.36)."""
         limit = float(self.settings.band_k) ** 2
+        own = {f: model.ssr(xs[f], self.masks[f]) for f in xs}
         for j, eff in enumerate(model.effects):
             if eff.start_grid(self.ctx) is None:
                 continue
@@ -205,26 +206,26 @@ class Selector:
             options = []
             for f, other in (("B", "A"), ("A", "B")):  # fold f takes the other's instant
                 x = self.held_at(model, xs, j, xs[other][col], f)
-                options.append((model.ssr(x, self.masks[f]) - model.ssr(xs[f], self.masks[f]), f, x))
-            cost, f, x = min(options, key=lambda o: o[0])  # fold B takes fold A's on a tie
+                ssr = model.ssr(x, self.masks[f])
+                options.append((ssr - own[f], f, x, ssr))
+            cost, f, x, ssr = min(options, key=lambda o: o[0])  # fold B takes fold A's on a tie
             if cost <= limit:
-                xs = {**xs, f: x}
+                xs, own = {**xs, f: x}, {**own, f: ssr}
         return xs
 
     def held_at(self, model: JointModel, xs: dict, j: int, at: float, fold: str) -> np.ndarray:
         """Fold ``fold``'s fit with ``model.effects[j]``'s grid parameter held at ``at``
         (:meth:`agreed`), from its own fit ``xs[fold]`` and the other fold's, each moved there
-        (:func:`.grid.on_grid`); ``xs[fold]`` itself where it already holds ``at``."""
+        (:func:`.grid.on_grid`)."""
         col = grid_column(model, j, self.ctx)
-        if xs[fold][col] == at:
-            return xs[fold]
-        held = copy.copy(model)
-        held.lower, held.upper = model.lower.copy(), model.upper.copy()
-        held.lower[col] = held.upper[col] = at
         other = xs["B" if fold == "A" else "A"]
         name = model.effects[j].name
-        starts = [on_grid(held, x, self.masks[fold], [j], self.ctx, {name: at}) for x in (xs[fold], other)]
-        return self.best(held, starts, self.masks[fold])
+        starts = []
+        for x in (xs[fold], other):
+            x = x.copy()
+            x[col] = at
+            starts.append(on_grid(model, x, self.masks[fold], [j], self.ctx, {name: at}))
+        return self.best(model, starts, self.masks[fold], held={col: at})
 
     def profiled(self, model: JointModel, starts, mask, effects) -> list[np.ndarray]:
         """``starts`` with the grid parameter of each of ``effects`` (indices into
