@@ -238,6 +238,14 @@ class Effect:
             spec = spec[int(rng.integers(len(spec)))]
         return {k: _draw_option(v, rng) for k, v in spec.items()}
 
+    def fitted_size(self, extras: np.ndarray, ctx: EffectContext) -> float | None:
+        """The size (in the units of :attr:`realistic`) that fitted ``extras`` give the effect,
+        where they say it; None where they do not (the default). A fit on all data far below
+        every real instance's size is nothing physical, however much it helped a fold: the
+        diagnosis does not name it (:data:`benchmark.problems.timedomain.diagnosis.selection.
+        NEGLIGIBLE_SHARE`)."""
+        return None
+
     def describe_fit(self, extras: np.ndarray, ctx: EffectContext, base: dict | None = None) -> dict:
         """Fitted extra parameters in physical terms, for reports (name -> value); ``base``:
         the fitted base parameters (``Rs, Ls, Le, Rr, J, fv, fc``) when the report has them."""

@@ -211,6 +211,12 @@ class SpeedSensorGain(Effect):
             return "the record has no speed channel"
         return None
 
+    def fitted_size(self, extras, ctx):
+        """The largest of the tachometer's errors as a fraction of the speed: gain error, offset
+        (of synchronous speed) and ripple."""
+        x = np.ravel(extras)
+        return float(max(abs(x[0]), abs(x[1]), math.hypot(x[2], x[3])))
+
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
         return {"gain": float(1.0 + x[0]), "offset_rad_s": float(x[1] * ctx.w_sync),

@@ -174,6 +174,10 @@ def test_tachometer_ripple_once_per_revolution():
     np.testing.assert_allclose(out[1, 2], w * (1 + 0.01 * np.sin(theta) - 0.005 * np.cos(theta)))
     np.testing.assert_array_equal(out[:, :2], sim[:, :2])
     assert eff.describe_fit(np.array([0.0, 0.0, 0.003, 0.004]), ctx)["ripple_per_revolution"] == pytest.approx(0.005)
+    # its size for the physical check before naming: the largest error, a fraction of the speed
+    assert eff.fitted_size(np.array([0.000258, -0.000298, 0.0, 0.0]), ctx) == pytest.approx(0.000298)
+    assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004]), ctx) == pytest.approx(0.005)
+    assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004]), ctx) > 0.1 * eff.realistic[0]
 
 
 def test_leakage_curve_falls_from_the_unsaturated_value_to_its_floor():
