@@ -49,9 +49,17 @@ HELDOUT = {
     "temperature_drift": ("three_body",),
     "inverter_drop": ("mosfet_capacitive",),
     "current_sensor_saturation": ("hall_core", "current_transformer"),
-    "speed_sensor_gain": ("tacho_filter",),
+    "speed_sensor_gain": ("encoder_window",),
     "sensor_offset": ("thermal_drift",),
     "channel_delay": ("anti_alias", "mux_skew"),
+}
+
+#: Held-out forms the diagnosis has since been developed on (a blind draw showed what the
+#: catalogue's form left of them and the catalogue's form was extended to them): drawable by
+#: name and in ``all``, in no random pool (development draws stay draw for draw; held-out
+#: draws take the second forms written in their place).
+RETIRED = {
+    "speed_sensor_gain": ("tacho_filter",),  # the catalogue's tachometer filter, tach_lag
 }
 
 #: The motulator source (``synthetic/motulator_source.py``) injects three effects; development
@@ -85,8 +93,9 @@ def check_form_set(which: str) -> str:
 
 
 def all_forms(name: str) -> tuple[str, ...]:
-    """Every form of effect ``name``: development first, then held-out."""
-    return DEVELOPMENT[name] + HELDOUT[name]
+    """Every form of effect ``name``: development first, then retired (:data:`RETIRED`), then
+    held-out."""
+    return DEVELOPMENT[name] + RETIRED.get(name, ()) + HELDOUT[name]
 
 
 def forms_of(name: str, which: str = "development", scenario: str | None = None) -> tuple[str, ...]:
@@ -98,5 +107,6 @@ def forms_of(name: str, which: str = "development", scenario: str | None = None)
 
 
 def form_set_of(name: str, form: str) -> str:
-    """``development`` or ``heldout``: which set form ``form`` of effect ``name`` is in."""
-    return "development" if form in DEVELOPMENT[name] else "heldout"
+    """``development`` or ``heldout``: which set form ``form`` of effect ``name`` is in (a
+    retired form is a development form)."""
+    return "development" if form in DEVELOPMENT[name] + RETIRED.get(name, ()) else "heldout"

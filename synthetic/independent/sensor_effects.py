@@ -10,8 +10,10 @@ marked (h), equations in :mod:`~synthetic.independent.sensors`,
   amplitude of a rated-frequency sinusoid that reaches the knee, 2-4 ``I_n``; excitation
   exponent 8-16, secondary time constant 0.5-3 s, remanence up to 60 % of the knee flux per
   core, either sign.
-* ``speed_sensor_gain`` (``gain``, ``gain_ripple``; (h) ``tacho_filter``: first-order RC
-  filter of 1-5 ms on the tachometer): size = gain error, +-(1-5) % (fraction); offset up to
+* ``speed_sensor_gain`` (``gain``, ``gain_ripple``; ``tacho_filter``: first-order RC filter of
+  1-5 ms on the tachometer, held out until the diagnosis was developed on it; (h)
+  ``encoder_window``: an incremental encoder's speed, its count over a gate time of 1-5 ms):
+  size = gain error, +-(1-5) % (fraction); offset up to
   +-0.5 % of synchronous speed; ripple at the rotation frequency 0.2-1 % of the speed
   (``gain_ripple``).
 * ``sensor_offset`` (``both``, ``current``, ``voltage``): current offsets 0.05-0.3 A, voltage
@@ -74,12 +76,15 @@ class SpeedSensorGain(Effect):
                 "ripple": ripple, "ripple_phase": float(rng.uniform(0, 2 * np.pi))}
         if form == "tacho_filter":
             spec["time_constant"] = float(rng.uniform(1e-3, 5e-3))
+        if form == "encoder_window":
+            spec["gate_time"] = float(rng.uniform(1e-3, 5e-3))
         return spec
 
     def _apply(self, build, spec):
         build.sensors.update(speed_gain=1.0 + spec["size"], speed_offset=spec["offset"],
                              speed_ripple_rel=spec["ripple"], speed_ripple_phase=spec["ripple_phase"],
-                             speed_lag=float(spec.get("time_constant", 0.0)))
+                             speed_lag=float(spec.get("time_constant", 0.0)),
+                             speed_window=float(spec.get("gate_time", 0.0)))
 
 
 class SensorOffset(Effect):

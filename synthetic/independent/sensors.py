@@ -21,7 +21,8 @@ Sensor errors (the effects that live here):
 * tachometer ``g w + offset + a w sin(theta + phi)`` (gain, offset, ripple at the rotation
   frequency of the sensed shaft); held out: ``g F(w) + offset`` with ``F`` the first-order
   RC filter of time constant ``speed_lag`` that smooths a DC tachogenerator's commutator
-  ripple;
+  ripple (developed on since), and ``g W(w) + offset`` with ``W`` an incremental encoder's
+  speed: the angle it turned in the last ``speed_window`` s over that gate time;
 * channel timing: besides the lags above, held out: a second-order Bessel anti-aliasing
   filter on the current channels (``current_filter_delay``: its group delay at DC, s), and a
   multiplexed acquisition card whose channels are sampled one after the other
@@ -97,6 +98,7 @@ class Sensors:
         ``remanence`` per channel, ``w_rated`` rad/s).
     offset_drift : drift of the current offsets over the record, A.   offset_drift_tau : s.
     speed_lag : tachometer filter time constant, s (0 = none).
+    speed_window : an encoder's gate time, s (0 = none): the speed read is the mean over it.
     current_filter_delay : anti-aliasing Bessel filter's group delay at DC, s (0 = none).
     current_delays, voltage_delays : per-phase lags of a multiplexed card, internal steps
         (empty = the common lags ``current_delay``, ``voltage_delay``).
@@ -119,6 +121,7 @@ class Sensors:
     offset_drift: tuple = (0.0, 0.0)
     offset_drift_tau: float = 1.0
     speed_lag: float = 0.0
+    speed_window: float = 0.0
     current_filter_delay: float = 0.0
     current_delays: tuple = ()
     voltage_delays: tuple = ()
@@ -180,6 +183,20 @@ def first_order(x: np.ndarray, tau: float, dt: float) -> np.ndarray:
     return lfilter([1 - a], [1, -a], x, zi=[a * x[0]])[0]
 
 
+def gate_mean(x: np.ndarray, gate: float, dt: float) -> np.ndarray:
+    """The mean of ``x`` (sampled every ``dt`` s) over the last ``gate`` s: an encoder's count
+    over its gate time (its angle increment over the gate time), trapezoidal between samples;
+    before a full gate has passed, the mean since the first sample (settled at rest there)."""
+    n = max(int(round(gate / dt)), 1)
+    angle = np.concatenate([[0.0], np.cumsum(0.5 * (x[1:] + x[:-1]))]) * dt
+    out = np.empty_like(x, dtype=float)
+    out[n:] = (angle[n:] - angle[:-n]) / (n * dt)
+    k = np.arange(1, min(n, len(x)))
+    out[k] = angle[k] / (k * dt)
+    out[0] = x[0]
+    return out
+
+
 def _lowpass(x: np.ndarray, fc: float, h: float) -> np.ndarray:
     if fc <= 0:
         return x
@@ -208,6 +225,8 @@ def sensed_speed(w: np.ndarray, theta: np.ndarray, sensors: Sensors, noise: Nois
     ``theta`` (rad)."""
     if sensors.speed_lag:
         w = first_order(w, sensors.speed_lag, dt)
+    if sensors.speed_window:
+        w = gate_mean(w, sensors.speed_window, dt)
     y = sensors.speed_gain * w + sensors.speed_offset
     if sensors.speed_ripple_rel:
         y = y + sensors.speed_ripple_rel * w * np.sin(theta + sensors.speed_ripple_phase)

@@ -16,12 +16,14 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     phase, then back to alpha-beta; extras ``cs_level`` (``L`` over the recorded current peak)
     and ``cs_sharpness`` ``n`` (about 2.5 matches ``tanh``, 8-15 a knee, 30+ a clip).
 ``speed_sensor_gain``
-    Tachometer ``(1 + g) w + w_0`` (the plant), fitted as ``(1 + g + a sin(theta) + b cos(theta)) w
-    + w_0`` with a ripple once per revolution of the shaft angle ``theta`` (real tachometers
-    have one). Size: ``|g|``, 0.01-0.05; forms: ``sign`` of ``g``, ``offset`` ``w_0`` as a fraction
-    of synchronous speed (within +-0.005). Extras ``tach_gain_error`` (fraction),
-    ``tach_offset`` (fraction of synchronous speed), ``tach_ripple_sin``, ``tach_ripple_cos``.
-    Excluded when the record has no speed channel.
+    Tachometer ``(1 + g) w + w_0`` (the plant), fitted as ``(1 + g + a sin(theta) + b cos(theta))
+    F(w) + w_0`` with a ripple once per revolution of the shaft angle ``theta`` (real tachometers
+    have one) and ``F`` a first-order filter of time constant ``tau`` (a tachogenerator's RC
+    filter that smooths its commutator ripple, an encoder's speed averaged over its gate time:
+    0-10 ms). Size: ``|g|``, 0.01-0.05; forms: ``sign`` of ``g``, ``offset`` ``w_0`` as a
+    fraction of synchronous speed (within +-0.005). Extras ``tach_gain_error`` (fraction),
+    ``tach_offset`` (fraction of synchronous speed), ``tach_ripple_sin``, ``tach_ripple_cos``,
+    ``tach_lag`` (s). Excluded when the record has no speed channel.
 ``sensor_offset``
     DC offsets in the recorded voltage (V) and current (A) channels. A voltage offset drives a
     DC current through the stator (the motor sees ``v - offset``: a kernel term); a current
@@ -49,6 +51,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import signal
 
 from benchmark.core.effects import Effect
 from benchmark.problems.timedomain.extended import IDX
@@ -145,13 +148,34 @@ class CurrentSensorSaturation(Effect):
 
 
 # ----------------------------------------------------------------------------- tachometer
+def first_order_lag(w: np.ndarray, tau: np.ndarray, dt: float) -> np.ndarray:
+    """Rows of ``w`` (n, N) through first-order filters of time constants ``tau`` (n,) s, sampled
+    every ``dt`` s, each starting settled at its first value; a row with ``tau = 0`` passes
+    unchanged. Exact for an input linear between samples (ramp-invariant: the simulated speed is
+    continuous), and so linear in ``tau`` for ``tau`` far below ``dt`` (``w - tau dw/dt``): a fit
+    from no filter has a gradient (the step-invariant form has none there, its pole underflowing)."""
+    out = np.array(w, float, copy=True)
+    for k, tk in enumerate(np.ravel(tau)):
+        if tk > 0.0:
+            r = tk / dt
+            a = math.exp(-1.0 / r)
+            b = [1.0 - r * (1.0 - a), r * (1.0 - a) - a]
+            out[k] = signal.lfilter(b, [1.0, -a], out[k], zi=signal.lfilter_zi(b, [1.0, -a]) * out[k, 0])[0]
+    return out
+
+
 class SpeedSensorGain(Effect):
     name = "speed_sensor_gain"
     size_name = "gain_error"
     realistic = (0.01, 0.05)
-    extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos")
-    extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed")
-    physics = "tachometer gain error, offset and ripple at the rotation frequency"
+    extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos", "tach_lag")
+    extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed", "s")
+    physics = "tachometer gain error, offset, ripple at the rotation frequency and output filter"
+    #: The longest output filter a speed sensor has (s): a tachogenerator's RC filter or an
+    #: encoder's gate time, a few milliseconds.
+    MAX_LAG = 0.01
+    #: ... and the shortest one that is there for a reason (s): 1 ms.
+    SHORTEST_LAG = 1e-3
     shows_in = "steady speed off synchronous-minus-slip; a constant ratio in the speed residual"
     measure_stage = 3
     FORM_DRAWS = {"sign": {"choice": [-1.0, 1.0]}, "offset": [-0.005, 0.005]}
@@ -161,23 +185,24 @@ class SpeedSensorGain(Effect):
 
     def plant_extras(self, size, ctx, form=None):
         form = {**self.form, **(form or {})}
-        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0)), 0.0, 0.0])
+        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0)), 0.0, 0.0, 0.0])
 
     def extra_bounds(self, ctx):
-        return np.array([-0.1, -0.02, -0.05, -0.05]), np.array([0.1, 0.02, 0.05, 0.05])
+        return np.array([-0.1, -0.02, -0.05, -0.05, 0.0]), np.array([0.1, 0.02, 0.05, 0.05, self.MAX_LAG])
 
     def extra_starts(self, ctx):
-        return [np.array([0.0, 0.0, 0.0, 0.0])]
+        return [np.array([0.0, 0.0, 0.0, 0.0, 0.0])]
 
     def measure(self, sim, extras, ctx):
-        """``(1 + g) w + offset w_sync + w (a sin(theta) + b cos(theta))``: gain, offset and a
-        ripple once per revolution (an eccentric or unbalanced tachometer), ``theta`` the shaft
-        angle from the start of the record (the unknown initial angle is in ``a``, ``b``: the
-        ripple is linear in both, so a fit from zero is not stuck at a phase)."""
+        """``(1 + g + a sin(theta) + b cos(theta)) F(w) + offset w_sync``: gain, offset, a ripple
+        once per revolution (an eccentric or unbalanced tachometer) and the output filter ``F``
+        (:func:`first_order_lag`), ``theta`` the shaft angle from the start of the record (the
+        unknown initial angle is in ``a``, ``b``: the ripple is linear in both, so a fit from
+        zero is not stuck at a phase)."""
         extras = np.atleast_2d(extras)
         out = sim.copy()
-        w = sim[:, 2]
-        theta = np.cumsum(np.nan_to_num(w), axis=1) * (ctx.sample_time or 1.0)
+        theta = np.cumsum(np.nan_to_num(sim[:, 2]), axis=1) * (ctx.sample_time or 1.0)
+        w = first_order_lag(sim[:, 2], extras[:, 4], ctx.sample_time or 1.0)
         ripple = extras[:, 2:3] * np.sin(theta) + extras[:, 3:4] * np.cos(theta)
         out[:, 2] = w * (1.0 + extras[:, 0:1] + ripple) + extras[:, 1:2] * ctx.w_sync
         return out
@@ -190,6 +215,7 @@ class SpeedSensorGain(Effect):
         extras = np.atleast_2d(extras)
         dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
         theta = np.cumsum(np.nan_to_num(w), axis=1) * dt
+        w = first_order_lag(w, extras[:, 4], dt) if dt > 0 else w
         base = w * (1.0 + extras[:, 0:1]) + extras[:, 1:2] * ctx.w_sync
         sw, cw = w * np.sin(theta), w * np.cos(theta)
         with np.errstate(all="ignore"):
@@ -213,14 +239,16 @@ class SpeedSensorGain(Effect):
 
     def fitted_size(self, extras, ctx):
         """The largest of the tachometer's errors as a fraction of the speed: gain error, offset
-        (of synchronous speed) and ripple."""
+        (of synchronous speed), ripple and the filter (its time constant over the shortest real
+        one, :data:`SHORTEST_LAG`, counted as the smallest realistic gain error)."""
         x = np.ravel(extras)
-        return float(max(abs(x[0]), abs(x[1]), math.hypot(x[2], x[3])))
+        lag = x[4] / self.SHORTEST_LAG * self.realistic[0] if len(x) > 4 else 0.0
+        return float(max(abs(x[0]), abs(x[1]), math.hypot(x[2], x[3]), lag))
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
         return {"gain": float(1.0 + x[0]), "offset_rad_s": float(x[1] * ctx.w_sync),
-                "ripple_per_revolution": float(np.hypot(x[2], x[3]))}
+                "ripple_per_revolution": float(np.hypot(x[2], x[3])), "lag_s": float(x[4])}
 
 
 # ----------------------------------------------------------------------------- offsets

@@ -66,7 +66,7 @@ def test_neutral_augmentations_leave_the_base_model_unchanged():
     ctx = _ctx()
     base = base_row(PAPER_MOTOR)[None]
     ref = simulate_extended_batch(base, va, vb, False, 1 / 12000, 1)
-    neutral = [("sensor_offset", np.zeros(4)), ("speed_sensor_gain", np.zeros(4)), ("channel_delay", np.zeros(1)),
+    neutral = [("sensor_offset", np.zeros(4)), ("speed_sensor_gain", np.zeros(5)), ("channel_delay", np.zeros(1)),
                ("load_torque", np.array([0.0, 0.0, 0.0, 0.5, 0.0, 1 / 12000, 1.0])),
                ("iron_loss", np.array([0.0, 0.5])),
                ("main_saturation", np.array([0.0, 6.0, 0.0, 0.5])), ("leakage_saturation", np.array([0.0, 2.0, 0.0]))]
@@ -168,16 +168,37 @@ def test_tachometer_ripple_once_per_revolution():
                         L_M=0.1, L_sigma=0.01, sample_time=ts)
     sim = np.zeros((2, 3, 5000))
     sim[:, 2] = w
-    out = eff.measure(sim, np.array([[0.02, 0.001, 0.0, 0.0], [0.0, 0.0, 0.01, -0.005]]), ctx)
+    out = eff.measure(sim, np.array([[0.02, 0.001, 0.0, 0.0, 0.0], [0.0, 0.0, 0.01, -0.005, 0.0]]), ctx)
     np.testing.assert_allclose(out[0, 2], w * 1.02 + 0.001 * 157.08)
     theta = w * ts * np.arange(1, 5001)
     np.testing.assert_allclose(out[1, 2], w * (1 + 0.01 * np.sin(theta) - 0.005 * np.cos(theta)))
     np.testing.assert_array_equal(out[:, :2], sim[:, :2])
-    assert eff.describe_fit(np.array([0.0, 0.0, 0.003, 0.004]), ctx)["ripple_per_revolution"] == pytest.approx(0.005)
+    ripple = eff.describe_fit(np.array([0.0, 0.0, 0.003, 0.004, 0.0]), ctx)["ripple_per_revolution"]
+    assert ripple == pytest.approx(0.005)
     # its size for the physical check before naming: the largest error, a fraction of the speed
-    assert eff.fitted_size(np.array([0.000258, -0.000298, 0.0, 0.0]), ctx) == pytest.approx(0.000298)
-    assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004]), ctx) == pytest.approx(0.005)
-    assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004]), ctx) > 0.1 * eff.realistic[0]
+    # (a filter's time constant counted against the shortest real one, 1 ms, as the smallest gain error)
+    assert eff.fitted_size(np.array([0.000258, -0.000298, 0.0, 0.0, 1e-6]), ctx) == pytest.approx(0.000298)
+    assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004, 0.0]), ctx) == pytest.approx(0.005)
+    assert eff.fitted_size(np.array([0.0, 0.0, 0.0, 0.0, 3e-3]), ctx) == pytest.approx(0.03)
+    assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004, 0.0]), ctx) > 0.1 * eff.realistic[0]
+
+
+def test_tachometer_filter_lags_an_accelerating_shaft():
+    """``tach_lag``: the reading through ``1/(1 + s tau)``; on a shaft accelerating at ``a`` it
+    settles ``tau a`` below the speed, and a lag far below the sample time still moves the
+    reading in proportion (``w - tau dw/dt``: a fit from no filter has a gradient)."""
+    eff = load_effects("timedomain")["speed_sensor_gain"]
+    ts, acc = 1e-4, 500.0
+    ctx = EffectContext(w_e=314.16, V1=300.0, I_peak=50.0, w_sync=157.08, dc_link_voltage=0.0, E_cu=1.0,
+                        L_M=0.1, L_sigma=0.01, sample_time=ts)
+    sim = np.zeros((3, 3, 4000))
+    sim[:, 2] = acc * ts * np.arange(4000)
+    lags = np.array([0.0, 3e-3, 1e-9])
+    out = eff.measure(sim, np.column_stack([np.zeros((3, 4)), lags]), ctx)
+    np.testing.assert_array_equal(out[0, 2], sim[0, 2])
+    assert out[1, 2, -1] == pytest.approx(sim[1, 2, -1] - 3e-3 * acc, rel=1e-9)
+    assert sim[2, 2, -1] - out[2, 2, -1] == pytest.approx(1e-9 * acc, rel=1e-3)
+    assert eff.describe_fit(np.array([0.0, 0.0, 0.0, 0.0, 3e-3]), ctx)["lag_s"] == 3e-3
 
 
 def test_leakage_curve_falls_from_the_unsaturated_value_to_its_floor():

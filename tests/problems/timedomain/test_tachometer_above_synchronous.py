@@ -135,7 +135,7 @@ def test_the_stop_record_is_seen_through_the_same_tachometer(tmp_path):
                        friction_scale(p, ctx), 5.0)
     tach = BLIND_TACHOMETER_STOP["effects"][0]
     a, phase = tach["ripple"], tach["ripple_phase"]
-    x = np.r_[[p[n] for n in model.base_names], tach["size"], 0.0, a * np.cos(phase), a * np.sin(phase)]
+    x = np.r_[[p[n] for n in model.base_names], tach["size"], 0.0, a * np.cos(phase), a * np.sin(phase), 0.0]
     r = model.residuals(x[None, :])[0]
     used = data.used()
     rms = {ch: float(np.sqrt(np.mean(r[s][used[s]] ** 2))) for ch, s in data.channel_slices().items()}
