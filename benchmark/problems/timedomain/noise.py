@@ -19,8 +19,9 @@ current at rest), every channel's noise is the spread of that quiet segment
   start of a motor with a coupled load): there the envelopes are piecewise linear with a knot
   every two periods, with at least a 20 % relative uncertainty;
 * speed: over the steady state, the smaller of a Savitzky-Golay fit's residual
-  (:func:`noise_from_smooth`) and the same drifting-harmonics fit as the currents (see
-  :func:`steady_speed_noise`: each leaves some signal in, in different records);
+  (:func:`noise_from_smooth`) and the same drifting-harmonics fit as the currents at the orders
+  where a supply makes the torque pulsate (see :func:`steady_speed_noise`: each leaves some
+  signal in, in different records);
 * stop record: a smooth fit over the free motion.
 
 Segments too short for these fall back to a fourth-difference estimate (white noise only),
@@ -145,6 +146,8 @@ def modulated_periodic_residual(x, fs: float, f0: float, order: int = 2, n_harmo
     tau = np.linspace(-1.0, 1.0, n)
     h_max = int(n_harmonics or 0.48 * fs / f0)
     w = 2 * np.pi * f0 * t
+    if harmonics not in ("all", "torque"):
+        raise ValueError(f"harmonics must be 'all' or 'torque', got {harmonics!r}")
     orders = np.arange(1, h_max + 1) if harmonics == "all" else torque_harmonic_orders(h_max)
     plain = [np.ones(n)]
     for h in orders:
