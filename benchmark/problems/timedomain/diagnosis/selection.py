@@ -22,8 +22,9 @@ each of its two effects earns its place beside the other. Pairs are screened fir
 score tests (:mod:`.score_tests`: one effect added to the other's single fit on fold A, a
 Gauss-Newton step scored on fold B) and fitted fully, best screened first, where the screening
 says both may earn. Backward, every chosen effect must earn its place beside the others (each
-drop-one model refitted from several starts); the least needed effect that does not is dropped
-(``pruned``) and the check repeats; a dropped effect leaves the candidates and the forward
+drop-one model refitted from several starts), and its size on all data must reach a tenth of its
+smallest realistic size (:meth:`Selector.negligible`); the least needed effect that does not is
+dropped (``pruned``) and the check repeats; a dropped effect leaves the candidates and the forward
 selection resumes.
 """
 
