@@ -197,13 +197,14 @@ class Selector:
         set 31, a DC generator on from the start: fold B paid 339 for fold A's instant, load and
         sensor offset 2.07 against the load alone's 1.36)."""
         limit = float(self.settings.band_k) ** 2
-        own = {f: model.ssr(xs[f], self.masks[f]) for f in xs}
+        own: dict = {}  # each fold's own SSR, computed where an instant first differs
         for j, eff in enumerate(model.effects):
             if eff.start_grid(self.ctx) is None:
                 continue
             col = grid_column(model, j, self.ctx)
             if xs["A"][col] == xs["B"][col]:
                 continue
+            own = own or {f: model.ssr(xs[f], self.masks[f]) for f in xs}
             options = []
             for f, other in (("B", "A"), ("A", "B")):  # fold f takes the other's instant
                 x = self.held_at(model, xs, j, xs[other][col], f)
