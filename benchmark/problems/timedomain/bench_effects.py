@@ -37,7 +37,9 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     side. Size: the resonance ``sqrt(k (1/J_m + 1/J_l))/2 pi``, 30-200 Hz; forms
     ``inertia_ratio`` ``J_l/J_m`` 0.3-2, ``damping_ratio`` 0.02-0.1. The base model's ``J`` is the
     total inertia (what a rigid-shaft fit sees); extras ``tm_freq`` (Hz), ``tm_ratio``,
-    ``tm_zeta``.
+    ``tm_zeta``, ``tm_backlash`` (rad, the free play's half-width) and ``tm_hardening`` (an
+    elastomer coupling's stiffness at the torque scale's twist over its small-twist stiffness,
+    1-5; 1: a linear spring).
 ``channel_delay``
     A time skew between the voltage and current channels. Size: 0.1-2 samples; form ``lag``:
     ``current`` (the current channels lag) or ``voltage``. Augmentation: the simulated currents
@@ -316,31 +318,49 @@ class TwoMass(Effect):
     size_name = "resonance"
     size_unit = "Hz"
     realistic = (30.0, 200.0)
-    extra_names = ("tm_freq", "tm_ratio", "tm_zeta", "tm_backlash")
-    extra_units = ("Hz", "p.u. of motor inertia", "-", "rad")
-    physics = ("motor and load inertias coupled by a torsional spring and damper, with free play (backlash); "
-               "speed sensed on the load side")
+    extra_names = ("tm_freq", "tm_ratio", "tm_zeta", "tm_backlash", "tm_hardening")
+    extra_units = ("Hz", "p.u. of motor inertia", "-", "rad",
+                   "stiffness at the torque scale over small-twist stiffness")
+    physics = ("motor and load inertias coupled by a torsional spring and damper, with free play (backlash) and a "
+               "stiffness that may rise with the twist (an elastomer jaw coupling); speed sensed on the load side")
     shows_in = "speed oscillation and plateaus in the first cycles; torque ripple passed through the coupling"
     FORM_DRAWS = {"inertia_ratio": [0.3, 2.0], "damping_ratio": [0.02, 0.1]}
+    #: Largest hardening: an elastomer spider is some 2-4 times stiffer at its rated torque than
+    #: at rest (a jaw coupling's dynamic stiffness over its static one at small twist).
+    MAX_HARDENING = 5.0
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
         x = np.array([[float(size), float(form.get("inertia_ratio", 1.0)), float(form.get("damping_ratio", 0.05)),
-                       float(form.get("backlash", 0.0))]])
+                       float(form.get("backlash", 0.0)), float(form.get("hardening", 1.0))]])
         return self.augment(row[None, :], x, ctx)[0]
 
     def _f_max(self, ctx):
         return 400.0 if not ctx.sample_time else min(400.0, 0.125 / ctx.sample_time)
 
     def extra_bounds(self, ctx):
-        """Resonance (Hz), J_load / J_motor, damping ratio, half-width of the free play (rad,
-        up to 2 degrees; jaw and pin couplings have a few tenths of a degree)."""
-        return np.array([10.0, 0.05, 0.002, 0.0]), np.array([self._f_max(ctx), 5.0, 0.7, 0.035])
+        """Resonance (Hz, at small twist), J_load / J_motor, damping ratio, half-width of the free
+        play (rad, up to 2 degrees; jaw and pin couplings have a few tenths of a degree), hardening
+        (1: a linear spring, up to :data:`MAX_HARDENING`)."""
+        return (np.array([10.0, 0.05, 0.002, 0.0, 1.0]),
+                np.array([self._f_max(ctx), 5.0, 0.7, 0.035, self.MAX_HARDENING]))
 
     def extra_starts(self, ctx):
         fmax = self._f_max(ctx)
         # the first is the screening's; 20 Hz for soft couplings (a motulator record's 20.4 Hz was out of reach from 40)
-        return [np.array([min(f, 0.9 * fmax), 1.0, 0.05, 0.0]) for f in (40.0, 80.0, 150.0, 250.0, 20.0)]
+        return [np.array([min(f, 0.9 * fmax), 1.0, 0.05, 0.0, 1.0]) for f in (40.0, 80.0, 150.0, 250.0, 20.0)]
+
+    @staticmethod
+    def cubic_term(k, hardening, ctx):
+        """``k_cubic`` (1/rad^2) of a coupling of small-twist stiffness ``k`` (N m/rad) whose
+        incremental stiffness ``k (1 + 3 k_cubic z^2)`` is ``hardening`` times ``k`` at the twist
+        that transmits the torque scale (``ctx.torque_scale``, N m): that twist is
+        ``z_n = T / (k (1 + (H - 1)/3))`` and ``k_cubic = (H - 1) / (3 z_n^2)``."""
+        H = np.maximum(np.asarray(hardening, float), 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z_n = ctx.torque_scale / (k * (1.0 + (H - 1.0) / 3.0))
+            out = (H - 1.0) / (3.0 * z_n * z_n)
+        return np.where(H > 1.0, out, 0.0)
 
     def augment(self, rows, extras, ctx):
         rows = rows.copy()
@@ -355,12 +375,15 @@ class TwoMass(Effect):
         rows[:, IDX["k_sh"]] = k
         rows[:, IDX["c_sh"]] = 2.0 * z * np.sqrt(k * J_r)
         rows[:, IDX["backlash"]] = extras[:, 3] if extras.shape[1] > 3 else 0.0
+        rows[:, IDX["k_cubic"]] = self.cubic_term(k, extras[:, 4], ctx) if extras.shape[1] > 4 else 0.0
         return rows
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
         return {"resonance_Hz": float(x[0]), "J_load_over_J_motor": float(x[1]), "damping_ratio": float(x[2]),
-                "backlash_half_width_deg": float(np.degrees(x[3])) if len(x) > 3 else 0.0}
+                "backlash_half_width_deg": float(np.degrees(x[3])) if len(x) > 3 else 0.0,
+                "stiffness_at_torque_scale_over_small_twist": float(x[4]) if len(x) > 4 else 1.0,
+                "torque_scale_Nm": float(ctx.torque_scale)}
 
 
 # ----------------------------------------------------------------------------- channel skew

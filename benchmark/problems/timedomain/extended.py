@@ -103,17 +103,26 @@ def _switched(t, t_on, t_rise, tau, t_off):
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
-def _coupling_torque(twist, slip_speed, k, c, half_play):
+def _coupling_torque(twist, slip_speed, k, c, half_play, k_cubic):
     """Torque (N m) through a coupling of stiffness ``k`` (N m/rad) and damping ``c`` (N m s/rad)
     twisted by ``twist`` (rad) at ``slip_speed`` (rad/s), with free play of half-width
-    ``half_play`` (rad): nothing passes within the play, the spring and damper act in contact."""
+    ``half_play`` (rad): nothing passes within the play, the spring and damper act in contact.
+    A hardening (elastomer) coupling, ``k_cubic`` > 0 (1/rad^2): the spring's torque is
+    ``k z (1 + k_cubic z^2)`` on the contact twist ``z``, its incremental stiffness
+    ``k (1 + 3 k_cubic z^2)``, and the damping follows the stiffness's square root (a constant
+    damping ratio: the material's loss factor)."""
     if half_play <= 0.0:
-        return k * twist + c * slip_speed
-    if twist > half_play:
-        return k * (twist - half_play) + c * slip_speed
-    if twist < -half_play:
-        return k * (twist + half_play) + c * slip_speed
-    return 0.0
+        z = twist
+    elif twist > half_play:
+        z = twist - half_play
+    elif twist < -half_play:
+        z = twist + half_play
+    else:
+        return 0.0
+    if k_cubic > 0.0:
+        q = k_cubic * z * z
+        return k * z * (1.0 + q) + c * math.sqrt(1.0 + 3.0 * q) * slip_speed
+    return k * z + c * slip_speed
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
@@ -223,7 +232,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
         # two-mass shaft: friction on the motor side, the load on the load side
         wm = w / p
         wl = x[8]
-        t_sh = _coupling_torque(x[9], wm - wl, c[32], c[33], c[37])
+        t_sh = _coupling_torque(x[9], wm - wl, c[32], c[33], c[37], c[44])
         drive_m = t_m - t_sh - fv * wm
         out[6] = p / J * (drive_m - _resist(direction, drive_m, fc))
         t_pass, t_dyn = _loads(c, t, wl)
