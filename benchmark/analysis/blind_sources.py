@@ -56,6 +56,15 @@ def stated_skew(settings: BlindSettings, d: dict, injected: float | None) -> flo
     return float(rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 2.0))
 
 
+def blind_description(folder: Path, text: str) -> None:
+    """Replace ``folder/meta.yaml``'s description (a simulator's names the effects it injected)
+    by ``text``: a blind set's files say nothing of its truth."""
+    meta = Path(folder) / "meta.yaml"
+    doc = yaml.safe_load(meta.read_text()) or {}
+    doc["description"] = text
+    meta.write_text(yaml.safe_dump(doc, sort_keys=False))
+
+
 def state_skew(folder: Path, skew: float | None) -> None:
     """Write ``channel_skew`` (samples) into ``folder/meta.yaml`` (nothing when ``skew`` is None)."""
     if skew is None:
@@ -175,6 +184,8 @@ def motulator_options(rng: np.random.Generator, name: str, forms: str, duration:
                 "damping_ratio": float(rng.uniform(0.05, 0.2))}
         if form == "elastomer":
             opts.update(form=form, hardening=float(rng.uniform(1.5, 3.0)))
+        if form == "slip_clutch":
+            opts.update(form=form, slip_share=float(rng.uniform(0.7, 1.8)))
         return opts
     opts = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
     if form == "step":
@@ -216,6 +227,7 @@ def motulator_source(settings: BlindSettings):
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
                                settings.duration, settings.sample_rate, settings.motulator_stop)
+        blind_description(Path(folder), f"motulator simulation: {d['scenario']} start")
 
     return draws, make
 

@@ -299,3 +299,31 @@ def test_forms_key_draws_heldout_forms_and_a_heldout_plant_set_runs_end_to_end(t
     assert eff["name"] == "current_sensor_saturation" and eff["form"] in HELDOUT[eff["name"]]
     assert seen and seen[0] > 500 and summary["n"] == 1
     assert (tmp_path / "out" / "plant" / "blind.json").exists()
+
+
+def test_a_blind_sets_description_names_no_effect(tmp_path, monkeypatch):
+    """motulator's data folders describe the effects injected (``... start with two_mass``); a
+    blind draw's folder says only the source and the start."""
+    from pathlib import Path
+
+    import yaml
+    from hydra import compose, initialize_config_dir
+
+    import synthetic.motulator_source as ms
+    from benchmark.analysis.blind import BlindSettings
+    from benchmark.analysis.blind_sources import motulator_source
+
+    def fake(motor, scenario, effects, noise, seed, out, *args):
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "meta.yaml").write_text(yaml.safe_dump(
+            {"kind": "startup", "description": f"motulator simulation: {scenario} start with {', '.join(effects)}"}))
+
+    monkeypatch.setattr(ms, "make_motulator_dataset", fake)
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        s = BlindSettings.from_run(compose("blind", overrides=["source=motulator", "n=3", "seed=5", "free_share=0"]))
+    draws, make = motulator_source(s)
+    make(draws[0], tmp_path / "set")
+    meta = yaml.safe_load((tmp_path / "set" / "meta.yaml").read_text())
+    assert meta["kind"] == "startup"
+    assert not any(e in meta["description"] for e in draws[0]["effects"]), meta["description"]
