@@ -27,8 +27,9 @@ Effects motulator provides: ``main_saturation`` (its saturable Gamma model,
 sensed on the load side) and ``load_torque``. Coulomb friction is motulator's speed-dependent
 friction coefficient ``B_L(|w|) = fv + fc/max(|w|, eps)`` (``eps`` = :data:`COULOMB_SMOOTHING`).
 Held-out forms (for scoring only, :mod:`synthetic.motulator_effects`; option ``form``):
-``main_saturation`` ``steel_gap`` (gap plus M800-50A iron), ``two_mass`` ``elastomer``
-(progressive coupling), ``load_torque`` ``dc_generator`` (a DC generator with its armature
+``main_saturation`` ``steel_gap`` (gap plus M800-50A iron), ``two_mass`` ``slip_clutch``
+(a torque limiter slipping in series with the coupling; ``elastomer``, a progressive coupling, is retired
+from them), ``load_torque`` ``dc_generator`` (a DC generator with its armature
 circuit as an extra state).
 """
 
@@ -305,7 +306,8 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
         rated flux, fraction; ``exponent``; held out: ``form: steel_gap`` with ``iron_ratio``),
         ``two_mass`` (``size``: load-side share of the inertia; ``resonance_hz``;
         ``damping_ratio``; friction acts on, and the speed is sensed on, the load side; held
-        out: ``form: elastomer`` with ``hardening``), ``load_torque`` (``form``: ``step``, an
+        out: ``form: slip_clutch`` with ``slip_share``; retired: ``form: elastomer``
+        with ``hardening``), ``load_torque`` (``form``: ``step``, an
         active torque from ``time`` s; ``constant``, a passive motion-opposing torque from the
         start; ``quadratic``, ``k*w**2`` reaching ``torque`` at synchronous speed; held out,
         ``dc_generator`` closed at ``time`` s with ``emf`` V at synchronous speed,

@@ -40,8 +40,11 @@ per sample); held-out forms marked (h):
   ``dc_generator``: armature time constant 2-20 ms, EMF 100-250 V at synchronous speed, brush
   drop 1-2 V, armature closed at the start or at 30-70 % of the record): size = ``T_L/T_n``
   (the generator's: its steady torque at synchronous speed), 0.1-1.0.
-* ``two_mass`` (``spring``, ``backlash`` of 0.1-0.5 deg; (h) ``elastomer``: stiffness 1.5-3 x
-  harder at rated torque): size = (small-twist) torsional resonance, 30-200 Hz (log-uniform);
+* ``two_mass`` (``spring``, ``backlash`` of 0.1-0.5 deg; ``elastomer`` (retired from the
+  held-out forms): stiffness 1.5-3 x harder at rated torque; (h) ``slip_clutch``: a
+  friction torque limiter in series with the spring, slipping at 0.7-1.8 x the rated torque (set to
+  spare the load machine the starting torque)):
+  size = (small-twist) torsional resonance, 30-200 Hz (log-uniform);
   load inertia 0.3-2 x the motor's; damping ratio 0.02-0.1.
 """
 
@@ -320,6 +323,8 @@ class TwoMass(Effect):
                 "backlash": bl}
         if form == "elastomer":
             spec["hardening"] = float(rng.uniform(1.5, 3.0))
+        if form == "slip_clutch":
+            spec["slip_share"] = float(rng.uniform(0.7, 1.8))
         return spec
 
     def _apply(self, build, spec):
@@ -334,9 +339,11 @@ class TwoMass(Effect):
             # T_n = k z_n (1 + (H - 1)/3), z_r = z_n / sqrt(H - 1)
             H = spec["hardening"]
             z_r = build.motor.rated_torque / (k * (1 + (H - 1) / 3)) / math.sqrt(H - 1)
+        T_lim = spec["slip_share"] * build.motor.rated_torque if spec["form"] == "slip_clutch" else 0.0
         build.plant["mechanics"] = replace(build.plant["mechanics"], J_load=Jl, stiffness=k, damping=c,
-                                           backlash=spec["backlash"], twist_ref=z_r)
-        return {"J_load": Jl, "stiffness": k, "damping": c, **({"twist_ref": z_r} if z_r else {})}
+                                           backlash=spec["backlash"], twist_ref=z_r, slip_torque=T_lim)
+        return {"J_load": Jl, "stiffness": k, "damping": c, **({"twist_ref": z_r} if z_r else {}),
+                **({"slip_torque": T_lim} if T_lim else {})}
 
 
 EFFECTS = {e.name: e for e in (CoulombFriction(), DoubleCage(), MainSaturation(), IronLossEffect(),

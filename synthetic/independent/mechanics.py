@@ -31,7 +31,13 @@ Held-out form ``elastomer`` (``twist_ref`` > 0): a progressive elastomer couplin
 coupling with a polyurethane spider, whose dynamic stiffness rises with the transmitted
 torque), ``T_sh = k (z + z^3/(3 z_r^2)) + c sqrt(1 + (z/z_r)^2) (w_m - w_l)``: the
 incremental stiffness ``k (1 + (z/z_r)^2)`` hardens with the twist and the damping follows
-its square root (a constant damping ratio, i.e. the material's loss factor).
+its square root (a constant damping ratio, i.e. the material's loss factor); retired (the
+diagnosis's coupling has this hardening since). Held-out form ``slip_clutch``
+(``slip_torque`` > 0): a friction torque limiter (slip hub) in series with the spring, set at
+``T_lim``: the spring's torque ``k z`` cannot pass it; while it is there and the halves keep
+moving apart, the hub slips and the twist stays (a Jenkins element: ``dz/dt = w_m - w_l``
+unless ``|k z| >= T_lim`` with the slip in its direction, then 0), the damper across the whole
+coupling, ``T_sh = min(max(k z, -T_lim), T_lim) + c (w_m - w_l)``.
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ from numba import njit
 
 LOADS = ("none", "constant", "quadratic", "step", "dc_generator")
 (M_JM, M_JL, M_FV, M_FC, M_K, M_C, M_BL, M_TWO, M_LOAD, M_TL, M_WREF, M_TSTEP, M_FS, M_WS, M_KE, M_RA, M_LA, M_UB,
- M_IB, M_ZR, M_PG) = range(21)
+ M_IB, M_ZR, M_PG, M_TS) = range(22)
 N_MECH = 5  # states: w_m, w_l, twist, theta, i_a
 
 
@@ -67,6 +73,7 @@ class Mechanics:
     palmgren : Palmgren coefficient ``c_p``, N m (rad/s)^(-2/3).
     generator : DC generator ``(k_e V s/rad, R_a ohm, L_a H, U_b V, i_b A)`` (load ``dc_generator``).
     twist_ref : elastomer hardening twist ``z_r``, rad (0: linear spring).
+    slip_torque : torque ``T_lim`` at which a slip hub in series with the spring slips, N m (0: none).
     """
 
     J_load: float = 0.0
@@ -82,6 +89,7 @@ class Mechanics:
     palmgren: float = 0.0
     generator: tuple = (0.0, 1.0, 1.0, 0.0, 1.0)
     twist_ref: float = 0.0
+    slip_torque: float = 0.0
 
     def __post_init__(self):
         if self.load not in LOADS:
@@ -100,7 +108,7 @@ class Mechanics:
         return math.sqrt(self.stiffness * (1 / J_motor + 1 / self.J_load)) / (2 * math.pi)
 
     def pack(self, J: float, fv: float, fc: float) -> np.ndarray:
-        out = np.zeros(21)
+        out = np.zeros(22)
         out[M_JM], out[M_JL], out[M_FV], out[M_FC] = J, self.J_load, fv, fc
         out[M_K], out[M_C], out[M_BL], out[M_TWO] = self.stiffness, self.damping, self.backlash, float(self.two_mass)
         out[M_LOAD], out[M_TL] = LOADS.index(self.load), self.load_torque
@@ -108,6 +116,7 @@ class Mechanics:
         out[M_FS], out[M_WS], out[M_PG] = self.breakaway, self.stribeck_speed, self.palmgren
         out[M_KE:M_IB + 1] = self.generator
         out[M_ZR] = self.twist_ref
+        out[M_TS] = self.slip_torque
         return out
 
     def armature_time_constant(self) -> float:
@@ -145,11 +154,26 @@ def _spring(tw, dw, mech):
     if zr > 0.0:
         q = tw / zr
         return mech[M_K] * tw * (1.0 + q * q / 3.0) + mech[M_C] * math.sqrt(1.0 + q * q) * dw
+    ts = mech[M_TS]
+    if ts > 0.0:
+        return min(max(mech[M_K] * tw, -ts), ts) + mech[M_C] * dw
     if tw > bl:
         return mech[M_K] * (tw - bl) + mech[M_C] * dw
     if tw < -bl:
         return mech[M_K] * (tw + bl) + mech[M_C] * dw
     return 0.0
+
+
+@njit(cache=True)
+def _twist_rate(tw, dw, mech):
+    """``d twist/dt`` (rad/s) at twist ``tw`` and speed difference ``dw``: ``dw``, or 0 while a
+    slip hub slips (its spring at the limit and the halves moving further apart)."""
+    ts = mech[M_TS]
+    if ts > 0.0:
+        tk = mech[M_K] * tw
+        if (tk >= ts and dw > 0.0) or (tk <= -ts and dw < 0.0):
+            return 0.0
+    return dw
 
 
 @njit(cache=True)
@@ -207,7 +231,7 @@ def mech_derivatives(t, x, b, Te, mech, dx):
     tdyn += _generator(t, wl, x[b + 4], mech, dx, b + 4)
     drive_l = tsh - tdyn
     dx[b + 1] = (drive_l - _resist(wl, drive_l, tcl)) / mech[M_JL]
-    dx[b + 2] = wm - wl
+    dx[b + 2] = _twist_rate(x[b + 2], wm - wl, mech)
     dx[b + 3] = wl
     return tsh
 

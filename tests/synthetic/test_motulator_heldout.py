@@ -1,8 +1,9 @@
 """Held-out forms of the motulator source: the split, the draws, the curves and the records.
 
 motulator injects three effects; their held-out forms (gap plus M800-50A magnetising curve,
-elastomer coupling, DC generator load) are built on motulator's own classes
-(``synthetic/motulator_effects.py``). Records: a 2-pole 1 kW motor, 0.08 s at 5 kHz, noise-free.
+slip clutch, DC generator load; the retired elastomer coupling is drawn by name only) are built
+on motulator's own classes (``synthetic/motulator_effects.py``). Records: a 2-pole 1 kW motor,
+0.08 s at 5 kHz, noise-free.
 """
 
 from __future__ import annotations
@@ -10,14 +11,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from synthetic.independent.forms import MOTULATOR_DEVELOPMENT, MOTULATOR_HELDOUT, motulator_forms_of
+from synthetic.independent.forms import MOTULATOR_DEVELOPMENT, MOTULATOR_HELDOUT, MOTULATOR_RETIRED, motulator_forms_of
 from synthetic.motulator_effects import EFFECTS, steel_gap_inductance
 
 PAR = {"Rs": 4.96434, "Ls": 0.1075, "Le": 0.01098, "Rr": 1.55618, "J": 0.003, "fv": 0.00033, "fc": 0.04297}
 SMALL = {"name": "small_2pole", "pole_pairs": 1, "voltage": 230.0, "frequency": 50.0, "parameters": PAR,
          "rated_power": 1000.0}
 HELD = {"main_saturation": {"form": "steel_gap", "size": 0.3, "iron_ratio": 250.0},
-        "two_mass": {"form": "elastomer", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1, "hardening": 2.5},
+        "two_mass": {"form": "slip_clutch", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1, "slip_share": 0.8},
         "load_torque": {"form": "dc_generator", "size": 0.5, "time": 0.04, "armature_time_constant": 0.01}}
 
 
@@ -32,7 +33,9 @@ def test_the_split_covers_motulators_effects_and_the_draws_keep_development_by_d
     assert set(MOTULATOR_DEVELOPMENT) == set(MOTULATOR_HELDOUT) == set(EFFECTS) == set(MOTULATOR_EFFECTS)
     for name in EFFECTS:
         assert not set(MOTULATOR_DEVELOPMENT[name]) & set(MOTULATOR_HELDOUT[name])
-        assert motulator_forms_of(name, "all") == MOTULATOR_DEVELOPMENT[name] + MOTULATOR_HELDOUT[name]
+        assert motulator_forms_of(name, "all") == (MOTULATOR_DEVELOPMENT[name] + MOTULATOR_RETIRED.get(name, ())
+                                                   + MOTULATOR_HELDOUT[name])
+        assert not set(MOTULATOR_RETIRED.get(name, ())) & set(motulator_forms_of(name, "heldout"))
     rng = np.random.default_rng(2)
     dev = [motulator_options(rng, e, "development", 0.6) for e in EFFECTS for _ in range(20)]
     assert all("form" not in o or o["form"] in ("step", "constant", "quadratic") for o in dev)
@@ -61,7 +64,10 @@ def records(tmp_path_factory):
     from synthetic.motulator_source import make_motulator_dataset
 
     out = {}
-    for name, effects in {"none": None, **{k: {k: v} for k, v in HELD.items()}}.items():
+    retired = {"elastomer": {"two_mass": {"form": "elastomer", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1,
+                                          "hardening": 2.5}},
+               "spring": {"two_mass": {"size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1}}}
+    for name, effects in {"none": None, **{k: {k: v} for k, v in HELD.items()}, **retired}.items():
         folder = tmp_path_factory.mktemp(name)
         stop = name in ("none", "load_torque")
         truth = make_motulator_dataset(SMALL, "dol", effects, None, 0, folder, duration=0.08, sample_rate=5000,
@@ -92,3 +98,17 @@ def test_dc_generator_load_is_silent_until_switched_and_then_brakes(records):
     assert g["k_e"] ** 2 * w_sync / g["R_a"] == pytest.approx(0.5 * 1000.0 / (0.97 * w_sync))  # its size
     k = min(len(stop["speed"]), len(base_stop["speed"])) - 1
     assert stop["speed"][k] < base_stop["speed"][k] - 20.0  # it keeps braking in the free stop
+
+
+def test_slip_clutch_holds_the_spring_at_its_limit_and_the_retired_elastomer_is_drawn_by_name(records):
+    """The slip hub (0.8 of the rated torque) slips in the start: the load-side speed falls behind
+    the linear spring's of the same resonance by more than the mechanics' own oscillation; the
+    retired elastomer form is still made (by name), labelled a development form."""
+    rec, _, truth = records["two_mass"]
+    form = truth["effects"][0]["form"]
+    assert form["T_lim"] == pytest.approx(0.8 * 1000.0 / (0.97 * 2 * np.pi * 50), rel=1e-12)
+    spring = records["spring"][0]
+    lag = spring["speed"] - rec["speed"]
+    assert lag.max() > 5.0
+    _, _, el = records["elastomer"]
+    assert el["effects"][0]["form"]["form"] == "elastomer" and "form_set" not in el["effects"][0]
