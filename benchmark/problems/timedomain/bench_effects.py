@@ -56,6 +56,7 @@ import numpy as np
 from scipy import signal
 
 from benchmark.core.effects import Effect
+from benchmark.problems.timedomain.channel_timing import current_lags, delay_phase_currents, fractional_delay
 from benchmark.problems.timedomain.extended import IDX
 
 SQ3 = math.sqrt(3.0)
@@ -387,39 +388,18 @@ class TwoMass(Effect):
 
 
 # ----------------------------------------------------------------------------- channel skew
-def fractional_delay(x: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``x`` (n, c, N) delayed by ``d`` (n,) samples (may be negative or fractional): 4-point
-    Lagrange interpolation, zeros before the record (at rest), the last value after it."""
-    n, c, N = x.shape
-    pad = int(np.ceil(np.max(np.abs(d)))) + 3 if len(d) else 3
-    xp = np.concatenate([np.zeros((n, c, pad)), x, np.repeat(x[:, :, -1:], pad, axis=2)], axis=2)
-    out = np.empty_like(x)
-    k = np.arange(N)
-    for m in range(n):
-        dm = float(d[m])
-        if not np.isfinite(dm):
-            out[m] = np.nan
-            continue
-        u = k - dm + pad  # position in xp
-        b = np.floor(u).astype(int)
-        t = u - b
-        w_m1 = -t * (t - 1.0) * (t - 2.0) / 6.0
-        w_0 = (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0
-        w_1 = -(t + 1.0) * t * (t - 2.0) / 2.0
-        w_2 = (t + 1.0) * t * (t - 1.0) / 6.0
-        xm = xp[m]
-        out[m] = w_m1 * xm[:, b - 1] + w_0 * xm[:, b] + w_1 * xm[:, b + 1] + w_2 * xm[:, b + 2]
-    return out
-
-
 class ChannelDelay(Effect):
     """A time skew between the voltage and current channels of the acquisition. A card samples
     its channels at once (no skew) or in a documented sequence (a known fraction of a sample,
     ``k/N`` for the ``k``-th of ``N`` multiplexed channels): the skew is a fact of the
     acquisition, stated in ``meta.yaml`` (``channel_skew``, samples, positive when the currents
-    are sampled after the voltages; a number, or ``[low, high]``), and the fit searches it
-    within :data:`SKEW_TOLERANCE` of the stated value (within the stated range). A record that
-    states none (or 0) cannot carry one: ``channel_delay`` is then not a candidate."""
+    are sampled after the voltages; a number, or ``[low, high]``; or the card's sequence, a
+    mapping of phase channels to their own skews, :mod:`~benchmark.problems.timedomain.channel_timing`),
+    and the fit searches it within :data:`SKEW_TOLERANCE` of the stated value (within the stated
+    range). For a sequence the voltage channels are realigned when the record is read and the
+    two current channels keep their stated ratio: the extra ``skew`` is the larger current
+    channel's, each phase current delayed by its own. A record that states none (or 0) cannot
+    carry one: ``channel_delay`` is then not a candidate."""
 
     name = "channel_delay"
     size_name = "skew"
@@ -436,11 +416,23 @@ class ChannelDelay(Effect):
     SKEW_TOLERANCE = 0.25
 
     @staticmethod
+    def sequence(facts: dict) -> np.ndarray | None:
+        """A stated sequence's current skews ``(i_r, i_s)`` over the larger one (the extra
+        ``skew`` scales them), or None (a number, a range, none)."""
+        lags = current_lags((facts or {}).get("channel_skew"))
+        if lags is None or not any(lags):
+            return None
+        return np.array(lags) / max(lags, key=abs)
+
+    @staticmethod
     def stated(facts: dict) -> tuple[float, float] | None:
         """The stated skew range (samples) of ``facts`` (``channel_skew``), or None."""
         v = (facts or {}).get("channel_skew")
         if v is None:
             return None
+        if isinstance(v, dict):
+            lags = current_lags(v)
+            v = max(lags, key=abs)
         lo, hi = (float(v[0]), float(v[1])) if np.ndim(v) else (float(v), float(v))
         if lo == hi == 0.0:
             return None
@@ -474,9 +466,17 @@ class ChannelDelay(Effect):
     def measure(self, sim, extras, ctx):
         extras = np.atleast_2d(extras)
         out = sim.copy()
-        out[:, :2] = fractional_delay(np.ascontiguousarray(sim[:, :2]), extras[:, 0])
+        ratio = self.sequence(ctx.facts)
+        if ratio is None:
+            out[:, :2] = fractional_delay(np.ascontiguousarray(sim[:, :2]), extras[:, 0])
+        else:
+            out[:, :2] = delay_phase_currents(sim[:, :2], extras[:, :1] * ratio[None, :])
         return out
 
     def describe_fit(self, extras, ctx, base=None):
         x = float(np.ravel(extras)[0])
-        return {"skew_samples": x, "skew_s": x * ctx.sample_time}
+        out = {"skew_samples": x, "skew_s": x * ctx.sample_time}
+        ratio = self.sequence(ctx.facts)
+        if ratio is not None:
+            out.update(i_r_skew_samples=float(x * ratio[0]), i_s_skew_samples=float(x * ratio[1]))
+        return out

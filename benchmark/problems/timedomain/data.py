@@ -26,7 +26,13 @@ from benchmark.core.io import write_table_atomic, write_yaml_atomic
 from benchmark.core.matfiles import read_mat_table
 from benchmark.core.meta_file import check_meta_type, read_meta
 from benchmark.core.tables import _did_you_mean, _short_repr, check_time_column, read_table
-from benchmark.problems.timedomain.frames import clarke
+from benchmark.problems.timedomain.channel_timing import (
+    CURRENT_CHANNELS,
+    check_mapping_columns,
+    parse_channel_skew,
+    realign,
+)
+from benchmark.problems.timedomain.frames import clarke, inverse_clarke
 from benchmark.problems.timedomain.load_checks import check_records
 
 VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"))
@@ -121,9 +127,10 @@ class StartupDataset:
     nameplate : {rated_power (W), voltage (V line-line rms), current (A rms), speed (rpm),
         frequency (Hz)}, any subset, or None.
     channel_skew : the acquisition's documented skew of the current channels behind the voltage
-        channels, samples (a multiplexed card's sequence; a number, or a (low, high) range), or
-        None (channels sampled at once, or not stated): ``channel_delay`` is a candidate only
-        where it is stated.
+        channels, samples (a number, or a (low, high) range), or a multiplexed card's sequence
+        (a mapping of phase channels to samples, :mod:`~benchmark.problems.timedomain.channel_timing`;
+        its voltage skews are undone on reading), or None (channels sampled at once, or not
+        stated): ``channel_delay`` is a candidate only where it is stated.
     conditioning : what the conditioning on load did (plain-English lines for report.md).
     conditioning_removed : the effects it found and removed (``sensor_offset``,
         ``current_sensor_saturation``): the diagnosis checks each by its rule and lists those kept.
@@ -142,7 +149,7 @@ class StartupDataset:
     stator_dc_resistance: float | None = None
     winding_temperature: float | None = None
     nameplate: dict | None = None
-    channel_skew: float | tuple[float, float] | None = None
+    channel_skew: float | tuple[float, float] | dict[str, float] | None = None
     conditioning: list[str] = field(default_factory=list)
     conditioning_removed: list[str] = field(default_factory=list)
 
@@ -174,9 +181,11 @@ class StartupDataset:
                 m[key] = float(getattr(self, key))
         if self.nameplate:
             m["nameplate"] = {k: float(v) for k, v in self.nameplate.items()}
-        if self.channel_skew is not None:
-            m["channel_skew"] = ([float(v) for v in self.channel_skew] if np.ndim(self.channel_skew)
-                                 else float(self.channel_skew))
+        skew = self.channel_skew
+        if isinstance(skew, dict):  # the voltages were realigned on reading: the currents' skews are left
+            m["channel_skew"] = {k: float(v) for k, v in skew.items() if k in CURRENT_CHANNELS}
+        elif skew is not None:
+            m["channel_skew"] = [float(v) for v in skew] if np.ndim(skew) else float(skew)
         return m
 
 
@@ -221,7 +230,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     if meta.get("nameplate") is not None:
         optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])
     if meta.get("channel_skew") is not None:
-        optional["channel_skew"] = _channel_skew(meta_path, meta["channel_skew"])
+        optional["channel_skew"] = parse_channel_skew(meta_path, meta["channel_skew"])
     chord = meta.get("chord_voltage", False)
     if not isinstance(chord, bool):
         raise DataError(meta_path, f"key 'chord_voltage' must be true or false, got {_short_repr(chord)}")
@@ -233,7 +242,10 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     if not startup_files:
         raise DataError(folder, "no startup*.csv (or startup*.mat) file: a time-domain data set needs at least "
                                 "one start-up record")
-    startups = [_read_startup(f, ts, max_bytes, speed_unit=unit) for f in startup_files]
+    skew = optional.get("channel_skew")
+    startups = [_read_startup(f, ts, max_bytes, speed_unit=unit, skew=skew) for f in startup_files]
+    for rec in startups:
+        check_mapping_columns(meta_path, skew, rec.columns)
     stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
     _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
     check_records(startups, optional.get("nameplate"), p, hold, meta_path)
@@ -252,26 +264,6 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
 
         ds = condition_dataset(ds)
     return ds
-
-
-#: Largest channel skew meta.yaml may state, samples (a multiplexed card's whole sequence).
-MAX_CHANNEL_SKEW = 8.0
-
-
-def _channel_skew(meta_path: Path, value) -> float | tuple[float, float]:
-    """``channel_skew`` of meta.yaml: samples, a number or ``[low, high]``, within
-    :data:`MAX_CHANNEL_SKEW`."""
-    if isinstance(value, (list, tuple)):
-        if len(value) != 2:
-            raise DataError(meta_path, f"key 'channel_skew' must be a number or [low, high] (samples), got "
-                                       f"{_short_repr(value)}")
-        out = tuple(check_meta_type(meta_path, "channel_skew", v, float) for v in value)
-    else:
-        out = (check_meta_type(meta_path, "channel_skew", value, float),)
-    if not all(abs(v) <= MAX_CHANNEL_SKEW for v in out):
-        raise DataError(meta_path, f"key 'channel_skew' must be within +-{MAX_CHANNEL_SKEW:g} samples, got "
-                                   f"{_short_repr(value)}")
-    return (min(out), max(out)) if len(out) == 2 else out[0]
 
 
 def _nameplate(meta_path: Path, value) -> dict:
@@ -326,7 +318,7 @@ def _read_records_table(path: Path, alternatives, max_bytes: int | None, optiona
 
 
 def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, *,
-                  speed_unit: str = "rad/s") -> StartupRecord:
+                  speed_unit: str = "rad/s", skew=None) -> StartupRecord:
     alternatives = [("t", *v, *i) for v in VOLTAGE_COLUMNS for i in CURRENT_COLUMNS]
     df, cols = _read_records_table(path, alternatives, max_bytes, optional=OPTIONAL_COLUMNS)
     t = df["t"].to_numpy()
@@ -345,7 +337,8 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
         if "v_alpha" in cols:
             v_a, v_b = df["v_alpha"].to_numpy(), df["v_beta"].to_numpy()
         else:
-            v_a, v_b = clarke(df["v_r"], df["v_s"], df["v_t"])
+            v3 = realign(df[["v_r", "v_s", "v_t"]].to_numpy(float), skew)  # a stated sequence's voltage skews
+            v_a, v_b = clarke(v3[:, 0], v3[:, 1], v3[:, 2])
         if "i_alpha" in cols:
             i_a, i_b = df["i_alpha"].to_numpy(), df["i_beta"].to_numpy()
         else:
@@ -465,12 +458,16 @@ def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
 
 
 def write_startup_dataset(folder, ds: StartupDataset, truth: dict | None = None) -> Path:
-    """Write a data set in the section 7 format (alpha-beta columns); ``truth`` -> truth.yaml."""
+    """Write a data set in the section 7 format (alpha-beta columns; phase currents where a card's
+    sequence gives them their own skews); ``truth`` -> truth.yaml."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for k, r in enumerate(ds.startups):
         name = "startup.csv" if len(ds.startups) == 1 else f"startup_{k + 1}.csv"
         table = {"t": r.t, "v_alpha": r.v_alpha, "v_beta": r.v_beta, "i_alpha": r.i_alpha, "i_beta": r.i_beta}
+        if isinstance(ds.channel_skew, dict):
+            i_r, i_s, _ = inverse_clarke(r.i_alpha, r.i_beta)
+            table = {"t": r.t, "v_alpha": r.v_alpha, "v_beta": r.v_beta, "i_r": i_r, "i_s": i_s}
         if r.has_speed:
             table["speed"] = r.speed
         if r.torque is not None:

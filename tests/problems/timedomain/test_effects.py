@@ -22,7 +22,8 @@ import pytest
 from scipy.optimize import least_squares
 
 from benchmark.core.effects import EffectContext, effect_context, facts_of, load_effects
-from benchmark.problems.timedomain.bench_effects import compress_soft, fractional_delay
+from benchmark.problems.timedomain.bench_effects import compress_soft
+from benchmark.problems.timedomain.channel_timing import fractional_delay
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.extended import N_STATES, base_row, base_rows, simulate_extended_batch, valid_rows
 from benchmark.problems.timedomain.protocol import StartupStopTest
