@@ -49,11 +49,19 @@ def stated_skew(settings: BlindSettings, d: dict, injected: float | None) -> flo
     range the record does not carry, else none. Drawn from the set's own stream (so that the
     other draws do not change)."""
     if injected is not None:
-        return float(injected)
+        return injected if isinstance(injected, dict) else float(injected)
     rng = np.random.default_rng([int(settings.seed), int(d["index"]), 7])
     if rng.random() >= STATED_SKEW_WITHOUT:
         return None
     return float(rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 2.0))
+
+
+def card_sequence(skew: dict, kind: str) -> dict:
+    """The ``channel_skew`` mapping a multiplexed card's documentation gives for the plant's
+    ``mux_skew`` draw ``skew`` (its channels ``order`` converted ``size`` samples apart); an
+    inverter's voltages come from its gates, not from the card, and have none."""
+    seq = {c: k * float(skew["size"]) for k, c in enumerate(skew["order"])}
+    return {c: v for c, v in seq.items() if kind == "dol" or c.startswith("i_")}
 
 
 def blind_description(folder: Path, text: str) -> None:
@@ -71,7 +79,7 @@ def state_skew(folder: Path, skew: float | None) -> None:
         return
     meta = Path(folder) / "meta.yaml"
     doc = yaml.safe_load(meta.read_text()) or {}
-    doc["channel_skew"] = float(skew)
+    doc["channel_skew"] = {k: float(v) for k, v in skew.items()} if isinstance(skew, dict) else float(skew)
     meta.write_text(yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -126,12 +134,19 @@ def plant_source(settings: BlindSettings):
         d = {"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]}
         skew = next((e for e in spec["effects"] if e["name"] == "channel_delay"), None)
         injected = None if skew is None else (-1.0 if skew["form"] == "voltage_lag" else 1.0) * float(skew["size"])
+        if skew is not None and skew["form"] == "mux_skew":
+            injected = card_sequence(skew, kind)
         d["channel_skew"] = stated_skew(settings, d, injected)
         draws.append(d)
 
     def make(d, folder):
-        write_dataset(make_dataset(d["spec"]), folder)
-        state_skew(folder, d.get("channel_skew"))
+        made = make_dataset(d["spec"])
+        write_dataset(made, folder)
+        skew = d.get("channel_skew")
+        if isinstance(skew, dict):  # the card's sequence at its realised slot (a card's timing is documented)
+            eff = next(e for e in made.truth["effects"] if e["name"] == "channel_delay")
+            skew = card_sequence({**eff, "size": eff.get("achieved_size", eff["size"])}, d["scenario"])
+        state_skew(folder, skew)
 
     return draws, make
 

@@ -24,10 +24,11 @@ marked (h), equations in :mod:`~synthetic.independent.sensors`,
 * ``channel_delay`` (``current_lag``, ``voltage_lag``): size = skew 0.1-2 samples, realised
   to a multiple of ``1/M`` (``achieved_size``). (h) ``anti_alias``: a second-order Bessel
   filter on the current channels, size = its group delay at DC, 0.5-2 samples (cut-off
-  below the Nyquist frequency); (h) ``mux_skew``: a multiplexed card sampling ``i_r, i_s,
-  v_r, v_s, v_t`` one after the other in a drawn order, size = the time between two
-  channels, 0.1-0.3 samples (realised to a multiple of ``1/M``); inverter voltages are
-  computed from the gates and have no slot delay.
+  below the Nyquist frequency); ``mux_skew`` (retired from the held-out forms: a blind set
+  states its card's sequence, and the diagnosis's channel skew follows it): a multiplexed card
+  sampling ``i_r, i_s, v_r, v_s, v_t`` one after the other in a drawn order, size = the time
+  between two channels, 0.1-0.3 samples (realised to a multiple of ``1/M``); inverter
+  voltages are computed from the gates and have no slot delay.
 """
 
 from __future__ import annotations
