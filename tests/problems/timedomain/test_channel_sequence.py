@@ -89,3 +89,19 @@ def test_realignment_and_per_phase_delays_undo_what_the_card_did():
     i_s = -0.5 * out[0, 0] + 0.5 * np.sqrt(3) * out[0, 1]
     np.testing.assert_allclose(out[0, 0], a, atol=1e-12)  # i_r not delayed
     np.testing.assert_allclose(i_s, fractional_delay(phases[None, None, :, 1], np.array([0.6]))[0, 0], atol=1e-12)
+
+
+def test_a_set_read_with_a_sequence_is_written_back_as_what_was_read(card_record, tmp_path):
+    """The voltages are realigned on reading; written back, the set keeps its phase currents and
+    their skews, and states no voltage skew (reading it again must not realign twice)."""
+    from benchmark.problems.timedomain.data import write_startup_dataset
+
+    kind, made, folder = card_record
+    _state(folder, {"i_r": 0.0, "v_r": 0.2, "v_s": 0.4, "i_s": 0.6, "v_t": 0.8} if kind == "dol"
+           else {"i_r": 0.0, "i_s": 0.6})
+    first = load_startup_dataset(folder)
+    again = load_startup_dataset(write_startup_dataset(tmp_path / "copy", first))
+    assert again.channel_skew == {"i_r": 0.0, "i_s": 0.6}
+    a, b = first.startups[0], again.startups[0]
+    for name in ("v_alpha", "v_beta", "i_alpha", "i_beta"):
+        np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-12, atol=1e-9)
