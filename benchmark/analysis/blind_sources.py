@@ -67,9 +67,14 @@ def card_sequence(skew: dict, kind: str) -> dict:
 def blind_description(folder: Path, text: str) -> None:
     """Replace ``folder/meta.yaml``'s description (a simulator's names the effects it injected)
     by ``text``: a blind set's files say nothing of its truth."""
+    _set_meta(folder, "description", text)
+
+
+def _set_meta(folder: Path, key: str, value) -> None:
+    """Set ``key`` of ``folder/meta.yaml`` to ``value``, the other keys as they were."""
     meta = Path(folder) / "meta.yaml"
     doc = yaml.safe_load(meta.read_text()) or {}
-    doc["description"] = text
+    doc[key] = value
     meta.write_text(yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -77,10 +82,7 @@ def state_skew(folder: Path, skew: float | None) -> None:
     """Write ``channel_skew`` (samples) into ``folder/meta.yaml`` (nothing when ``skew`` is None)."""
     if skew is None:
         return
-    meta = Path(folder) / "meta.yaml"
-    doc = yaml.safe_load(meta.read_text()) or {}
-    doc["channel_skew"] = {k: float(v) for k, v in skew.items()} if isinstance(skew, dict) else float(skew)
-    meta.write_text(yaml.safe_dump(doc, sort_keys=False))
+    _set_meta(folder, "channel_skew", {k: float(v) for k, v in skew.items()} if isinstance(skew, dict) else float(skew))
 
 
 def own_source(settings: BlindSettings):
