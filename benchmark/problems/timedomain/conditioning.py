@@ -237,7 +237,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         speed=speed_out[sl], source=rec.source, torque=None if rec.torque is None else rec.torque[sl],
         weight=None if not n_masked else weight,
         switch_on_sample=None if steps is None else steps.steps[-1] + 1,
-        removed=put_back or None,
+        removed=put_back or None, columns=rec.columns,
     ), said, found, speed_offset
 
 

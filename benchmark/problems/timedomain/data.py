@@ -1,7 +1,8 @@
 """Time-domain data sets (``kind: startup``, docs/data_format.md): load, validate, write.
 
 A folder holds ``meta.yaml``, one or more ``startup*.csv`` and optionally ``stop*.csv``.
-Start-up columns: ``t``; voltages ``v_alpha, v_beta`` or phase ``v_r, v_s, v_t``; currents
+Start-up columns: ``t``; voltages ``v_alpha, v_beta``, phase ``v_r, v_s, v_t`` or line-to-line
+``v_rs, v_st`` (a three-wire supply's two line voltages, ``v_R - v_S`` and ``v_S - v_T``); currents
 ``i_alpha, i_beta`` or phase ``i_r, i_s`` (the third from a zero sum); ``speed``, mechanical
 rad/s. Phase quantities are turned into alpha-beta with the amplitude-invariant Clarke
 transform (:func:`benchmark.problems.timedomain.frames.clarke`). Stop columns: ``t``, ``speed``.
@@ -32,10 +33,10 @@ from benchmark.problems.timedomain.channel_timing import (
     parse_channel_skew,
     realign,
 )
-from benchmark.problems.timedomain.frames import clarke, inverse_clarke
+from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
 from benchmark.problems.timedomain.load_checks import check_records
 
-VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"))
+VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"), ("v_rs", "v_st"))
 CURRENT_COLUMNS = (("i_alpha", "i_beta"), ("i_r", "i_s"))
 
 #: A mechanical speed above this (rad/s, about 15 000 rpm) is implausible for a motor in
@@ -336,6 +337,8 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
     with np.errstate(all="ignore"):
         if "v_alpha" in cols:
             v_a, v_b = df["v_alpha"].to_numpy(), df["v_beta"].to_numpy()
+        elif "v_rs" in cols:  # two line-to-line voltages (a three-wire supply)
+            v_a, v_b = line_to_line_clarke(df["v_rs"].to_numpy(), df["v_st"].to_numpy())
         else:
             v3 = realign(df[["v_r", "v_s", "v_t"]].to_numpy(float), skew)  # a stated sequence's voltage skews
             v_a, v_b = clarke(v3[:, 0], v3[:, 1], v3[:, 2])
@@ -344,7 +347,8 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
         else:
             i_r, i_s = df["i_r"].to_numpy(), df["i_s"].to_numpy()
             i_a, i_b = clarke(i_r, i_s, -i_r - i_s)
-    for name, x, source in (("v_alpha", v_a, "v_r, v_s, v_t"), ("v_beta", v_b, "v_r, v_s, v_t"),
+    vcols = next(", ".join(c) for c in VOLTAGE_COLUMNS if c[0] in cols)
+    for name, x, source in (("v_alpha", v_a, vcols), ("v_beta", v_b, vcols),
                              ("i_alpha", i_a, "i_r, i_s"), ("i_beta", i_b, "i_r, i_s")):
         if not np.all(np.isfinite(x)):
             k = int(np.argmax(~np.isfinite(x)))
@@ -358,7 +362,7 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
                                            "simulated, not fitted; J then comes from the currents alone)"),
                       stacklevel=3)
     torque = df["torque"].to_numpy() if "torque" in df else None
-    columns = {"voltage": "v_alpha, v_beta" if "v_alpha" in cols else "v_r, v_s, v_t",
+    columns = {"voltage": vcols,
                "current": "i_alpha, i_beta" if "i_alpha" in cols else "i_r, i_s"}
     return StartupRecord(t=t - t[0], v_alpha=v_a, v_beta=v_b, i_alpha=i_a, i_beta=i_b, speed=speed,
                          source=str(path), torque=torque, columns=columns)

@@ -1,8 +1,9 @@
 """Reference frames: the amplitude-invariant Clarke transform used throughout the project,
 ``x_a = (2/3)(x_R - (x_S + x_T)/2)``, ``x_b = (x_S - x_T)/sqrt(3)`` (the paper's eq. 8 omits the
-2/3 factor: its alpha-beta quantities are 3/2 times these), its inverse, the rotation speed
-of an alpha-beta phasor (:func:`phasor_speed`: the supply frequency from the voltages) and a
-channel's phasor at a given speed (:func:`fundamental`)."""
+2/3 factor: its alpha-beta quantities are 3/2 times these), its inverse, the same from two
+line-to-line voltages (:func:`line_to_line_clarke`), the rotation speed of an alpha-beta phasor
+(:func:`phasor_speed`: the supply frequency from the voltages) and a channel's phasor at a
+given speed (:func:`fundamental`)."""
 
 from __future__ import annotations
 
@@ -20,6 +21,15 @@ def clarke(x_r, x_s, x_t):
     omits the 2/3: its alpha-beta quantities are 3/2 times these.)"""
     x_r, x_s, x_t = (np.asarray(x, dtype=float) for x in (x_r, x_s, x_t))
     return (2.0 / 3.0) * (x_r - 0.5 * (x_s + x_t)), (x_s - x_t) / SQRT3
+
+
+def line_to_line_clarke(v_rs, v_st):
+    """Two line-to-line voltages of a three-wire supply (``v_rs = v_R - v_S``, ``v_st = v_S -
+    v_T``, V) -> the (alpha, beta) voltages of the equivalent star, as :func:`clarke` gives them
+    from its phase voltages (a three-wire supply has no zero sequence to miss):
+    ``v_a = (2 v_rs + v_st) / 3``, ``v_b = v_st / sqrt(3)``."""
+    v_rs, v_st = np.asarray(v_rs, dtype=float), np.asarray(v_st, dtype=float)
+    return (2.0 * v_rs + v_st) / 3.0, v_st / SQRT3
 
 
 def inverse_clarke(x_a, x_b):

@@ -1,7 +1,8 @@
 """Checks on load of a start-up record for mistakes that still produce a result: wiring (phase
-labels swapped or rotated between the voltage and the current channels), units (a current or a
-speed scale the nameplate contradicts, an inertia the rated power contradicts) and the input
-hold (inverter levels read as a continuous voltage). Each says what is wrong and how to fix it
+labels swapped or rotated between the voltage and the current channels), units (a current,
+voltage or speed scale the nameplate contradicts, line-to-line voltages given as phase voltages,
+an inertia the rated power contradicts) and the input hold
+(inverter levels read as a continuous voltage). Each says what is wrong and how to fix it
 in one line: an error (:class:`~benchmark.core.errors.DataError`, exit status 2) where the data
 cannot be right, a warning (:class:`~benchmark.core.errors.DataWarning`) where they only look
 wrong. Run on the records as read, before the conditioning (:func:`check_records`).
@@ -29,6 +30,10 @@ PHASE_ANGLE_WINDOW = (-30.0, 120.0)
 CURRENT_RATIO_PLAUSIBLE = (0.05, 2.0)
 #: ... and outside this one it cannot be right (an error: mA for A, kA for A).
 CURRENT_RATIO_POSSIBLE = (0.005, 20.0)
+#: Supply voltage (line-to-line rms of the fundamental) over the nameplate voltage: plausible (a
+#: reduced-voltage or V/f inverter start is lower) and possible (V, not mV or kV).
+VOLTAGE_RATIO_PLAUSIBLE = (0.4, 1.25)
+VOLTAGE_RATIO_POSSIBLE = (0.02, 5.0)
 #: Final speed over the nameplate speed: plausible (a loaded start ends lower) and possible.
 SPEED_RATIO_PLAUSIBLE = (0.5, 1.3)
 SPEED_RATIO_POSSIBLE = (0.15, 4.0)
@@ -123,9 +128,9 @@ def _ratio_check(path, column, what, ratio, plausible, possible, hint, steady: b
 
 
 def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
-    """Current, speed and the energy's inertia against the nameplate (``current`` A rms, ``speed``
-    rpm, ``rated_power`` W): an error where the scale cannot be right (a current in mA), a
-    warning where it only looks wrong."""
+    """Current, voltage, speed and the energy's inertia against the nameplate (``current`` A rms,
+    ``voltage`` V line-to-line rms, ``speed`` rpm, ``rated_power`` W): an error where the scale
+    cannot be right (a current in mA), a warning where it only looks wrong."""
     if not nameplate:
         return
     tail = _tail(rec)
@@ -140,6 +145,16 @@ def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
         _ratio_check(rec.source, icols, f"the steady-state current {i_rms:.4g} A rms", ratio, CURRENT_RATIO_PLAUSIBLE,
                      CURRENT_RATIO_POSSIBLE, "are the currents in A (not mA or kA), and the probe's scale right?",
                      steady)
+    if nameplate.get("voltage") and abs(w_e) > 0:
+        vcols = _columns(rec, "voltage")
+        v_ll = abs(fundamental(rec.v_alpha[tail] + 1j * rec.v_beta[tail], t, w_e)) * math.sqrt(1.5)
+        ratio = v_ll / nameplate["voltage"]
+        hint = "are the voltages in V, and nameplate.voltage the line-to-line rms?"
+        if "v_r" in vcols and abs(ratio / math.sqrt(3.0) - 1.0) < 0.15:
+            hint = (f"{vcols} look like line-to-line voltages (sqrt(3) times a phase voltage): name two of them "
+                    "v_rs, v_st (v_R - v_S, v_S - v_T) and drop the third, or give the phase voltages")
+        _ratio_check(rec.source, vcols, f"the supply voltage {v_ll:.4g} V rms line-to-line", ratio,
+                     VOLTAGE_RATIO_PLAUSIBLE, VOLTAGE_RATIO_POSSIBLE, hint, steady)
     if nameplate.get("speed") and rec.has_speed:
         final = float(np.mean(rec.speed[tail]))
         rated = nameplate["speed"] * math.pi / 30.0

@@ -17,12 +17,14 @@ import re
 import shutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from benchmark.core.errors import DataWarning
 from benchmark.problems.timedomain.data import load_startup_dataset
 from synthetic.independent import make_dataset, make_spec, write_dataset
 
@@ -102,3 +104,56 @@ def test_six_step_voltages_read_as_linear_are_told_to_set_input_hold_zoh(tmp_pat
     assert out.returncode == 0, out.stderr[-2000:]
     (line,) = [s for s in out.stderr.splitlines() if "input_hold" in s]
     assert line.startswith(f"warning: {folder / 'meta.yaml'}: input_hold is linear") and "set input_hold: zoh" in line
+
+
+def _line_to_line(folder: Path, names=("v_rs", "v_st")) -> None:
+    """The phase voltage columns replaced by line-to-line ones, as a bench measures them:
+    ``v_R - v_S`` and ``v_S - v_T`` under ``names`` (and ``v_T - v_R`` when three names)."""
+    table = pd.read_csv(folder / "startup.csv")
+    v_r, v_s, v_t = (table[c].to_numpy() for c in ("v_r", "v_s", "v_t"))
+    lines = [v_r - v_s, v_s - v_t, v_t - v_r][:len(names)]
+    at = table.columns.get_loc("v_r")
+    table = table.drop(columns=["v_r", "v_s", "v_t"])
+    for k, (name, x) in enumerate(zip(names, lines, strict=True)):
+        table.insert(at + k, name, x)
+    table.to_csv(folder / "startup.csv", index=False)
+
+
+def test_two_line_to_line_voltages_are_read_as_the_phase_voltages_they_come_from(grid_start):
+    folder = _mistake(grid_start, "line_to_line")
+    _line_to_line(folder)
+    read, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
+    scale = np.max(np.abs(ok.v_alpha))
+    assert read.columns["voltage"] == "v_rs, v_st"
+    assert np.max(np.abs(read.v_alpha - ok.v_alpha)) < 1e-12 * scale
+    assert np.max(np.abs(read.v_beta - ok.v_beta)) < 1e-12 * scale
+
+
+def test_line_to_line_voltages_given_as_phase_columns_are_told_and_the_fix_reads_right(grid_start):
+    folder = _mistake(grid_start, "line_as_phase")
+    _line_to_line(folder, ("v_r", "v_s", "v_t"))  # v_R - v_S written under v_r, ...
+    with pytest.warns(DataWarning) as caught:
+        load_startup_dataset(folder)
+    (msg,) = [str(w.message) for w in caught if "line-to-line" in str(w.message)]
+    assert f"{folder / 'startup.csv'}, column 'v_r, v_s, v_t'" in msg
+    ratio = float(re.search(r"is ([\d.]+) times the nameplate's", msg).group(1))
+    assert abs(ratio / np.sqrt(3.0) - 1.0) < 0.05, msg
+    assert "name two of them v_rs, v_st" in msg
+    _rename_header(folder, {"v_r": "v_rs", "v_s": "v_st", "v_t": "unused"})  # done as the message says
+    table = pd.read_csv(folder / "startup.csv").drop(columns=["unused"])
+    table.to_csv(folder / "startup.csv", index=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DataWarning)  # the voltage now agrees with the nameplate
+        read = load_startup_dataset(folder).startups[0]
+    ok = load_startup_dataset(grid_start).startups[0]
+    assert np.allclose(read.v_alpha, ok.v_alpha, rtol=0, atol=1e-9 * np.max(np.abs(ok.v_alpha)))
+
+
+def test_voltages_in_kilovolts_against_the_nameplate(grid_start):
+    folder = _mistake(grid_start, "kilovolts")
+    table = pd.read_csv(folder / "startup.csv")
+    table[["v_r", "v_s", "v_t"]] /= 1000.0
+    table.to_csv(folder / "startup.csv", index=False)
+    msg = _error(_cli(folder))
+    assert f"{folder / 'startup.csv'}, column 'v_r, v_s, v_t'" in msg
+    assert "supply voltage" in msg and "which cannot be" in msg and "in V" in msg
