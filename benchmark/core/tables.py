@@ -332,6 +332,11 @@ def _fields_of_row(text: str, sep: str, row: int) -> int | None:
     return None
 
 
+#: Share of a time column's steps off its median step beyond which the record is taken for a
+#: variable-step simulation's output rather than a record with a few missing samples.
+VARIABLE_STEP_SHARE = 0.05
+
+
 def check_time_column(path: Path, t: np.ndarray, column: str = "t", rel_tol: float = 1e-3) -> float:
     """Check a time column strictly increases on a uniform grid; return the step (s).
 
@@ -357,10 +362,15 @@ def check_time_column(path: Path, t: np.ndarray, column: str = "t", rel_tol: flo
         jump = np.abs(dt - median) > 0.5 * median
         if jump.any():
             k = int(np.argmax(jump)) + 1
+            why = "(missing or repeated samples?)"
+            if np.mean(jump) > VARIABLE_STEP_SHARE:
+                why = (f"and {100 * np.mean(jump):.0f} % of the steps are off it, from {dt.min():.3g} to "
+                       f"{dt.max():.3g} s: a variable-step solver's output? Log it at a fixed sample time "
+                       "(a fixed-step solver, or the logging block's sample time) or resample every column "
+                       "onto a uniform grid first")
             raise DataError(
                 path,
-                f"irregular sampling: step {dt[k - 1]:.6g} s where the record's step is {median:.6g} s "
-                "(missing or repeated samples?)",
+                f"irregular sampling: step {dt[k - 1]:.6g} s where the record's step is {median:.6g} s {why}",
                 column=column,
                 row=k + 1,
             )

@@ -241,6 +241,18 @@ def m_time_gap(f):
     write_lines(f / "startup.csv", ls)
 
 
+def m_variable_step(f):
+    """A variable-step solver's output: the step doubles and halves as the dynamics allow."""
+    ls = lines(f / "startup.csv")
+    head, rows = ls[0], [r for r in ls[1:] if r]
+    t, step = 0.0, 1 / 12000
+    out = [head]
+    for k, r in enumerate(rows):
+        out.append(",".join([repr(t)] + r.split(",")[1:]))
+        t += step * (2.0 if (k // 7) % 2 else 1.0)
+    write_lines(f / "startup.csv", out)
+
+
 def m_time_jitter(f):
     """Timestamps 10 % of a step off the grid: not a gap, still not uniform."""
     edit_cell(f, 50, "t", repr(49.1 / 12000))
@@ -457,6 +469,12 @@ CASES = [
         m_time_gap,
         "error",
         ["startup.csv", "column 't', row 100", "irregular sampling"],
+    ),
+    (
+        "variable-step simulation",
+        m_variable_step,
+        "error",
+        ["startup.csv", "column 't'", "irregular sampling", "variable-step solver", "resample"],
     ),
     ("jittered time", m_time_jitter, "error", ["startup.csv", "column 't', row 50", "off the uniform grid"]),
     ("time in ms", m_time_ms, "error", ["startup.csv", "column 't'", "is t in ms?"]),
