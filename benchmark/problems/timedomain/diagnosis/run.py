@@ -216,6 +216,9 @@ def render_markdown(doc: dict) -> str:
         for r in rnd["candidates"]:
             lines.append(f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
                          f"| {'yes' if r['earns'] else 'no'} |")
+        if rnd.get("negligible"):
+            lines += ["", f"`{rnd['negligible']}` earns its place, but fitted on all data its size is negligible "
+                          "(below a tenth of the smallest realistic one): out of the candidates."]
     lines += ["", "Noise estimated from the data: "
               + "; ".join(f"{k} {v['std']:.3g} (+-{100 * v['rel_uncertainty']:.0f} %, {v['method']})"
                           for k, v in doc["noise"].items()),

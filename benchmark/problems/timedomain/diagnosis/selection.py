@@ -25,7 +25,9 @@ says both may earn. Backward, every chosen effect must earn its place beside the
 drop-one model refitted from several starts), and its size on all data must reach a tenth of its
 smallest realistic size (:meth:`Selector.negligible`); the least needed effect that does not is
 dropped (``pruned``) and the check repeats; a dropped effect leaves the candidates and the forward
-selection resumes.
+selection resumes. An effect that states its size is checked for it already on entry
+(:meth:`Selector.negligible_on_entry`): negligible on all data, it leaves the candidates before
+any round is fitted beside it.
 """
 
 from __future__ import annotations
@@ -88,6 +90,7 @@ class Selector:
         self.base_full: np.ndarray | None = None  # the base fitted on all data (set by the pipeline)
         self.input_noise = None  # what the measured voltage's noise adds to each channel (the pipeline's)
         self.removal_fits: dict = {}  # (removal, set) -> selector of the record with it put back (conditioning_check)
+        self.negligible_names: set[str] = set()  # out of this selection: negligible on entry (:meth:`forward`)
         labels = data.channel_labels()
         used = masks["A"] | masks["B"]
         lab = labels[used]
@@ -289,7 +292,7 @@ class Selector:
         cap = self.settings.max_effects
         while True:
             chosen = cur.effects
-            pool = [e for e in candidates if e.name not in cur.names]
+            pool = [e for e in candidates if e.name not in cur.names and e.name not in self.negligible_names]
             if not pool or cur.chi2 <= band**2 or (cap is not None and len(chosen) >= cap):
                 return cur
             fits = side_by_side(lambda e, c=chosen, s=cur: self.fit(c + [e], [(s, [s])], progress=progress), pool)
@@ -299,6 +302,10 @@ class Selector:
             rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
                    "heldout_chi2_from": cur.chi2, "candidates": rows, "chosen": None, "indistinguishable": []}
             rounds.append(rnd)
+            if best["earns"] and self.negligible_on_entry(trials[best["effect"]], best["effect"]):
+                rnd["negligible"] = best["effect"]  # dropped now, not after the rounds beside it
+                self.negligible_names.add(best["effect"])
+                continue
             if best["earns"]:
                 sf = trials[best["effect"]]
                 rnd["chosen"] = best["effect"]
@@ -395,6 +402,16 @@ class Selector:
                 out.append(eff.name)
         return out
 
+    def negligible_on_entry(self, sf: SetFit, name: str) -> bool:
+        """Whether ``name``, about to enter with ``sf``, is negligible on all data (:meth:`negligible`
+        of ``sf`` fitted on all data, as the backward check would find it): checked on entry for
+        effects that state their fitted size, so that no rounds are fitted beside it."""
+        j = sf.model.effect_names.index(name)
+        if sf.model.effects[j].fitted_size(sf.xs["A"][sf.model.slices[j]], self.ctx) is None:
+            return False
+        full, x = self.with_full_fit(sf)
+        return name in self.negligible(full, x)
+
     def backward(self, cur: SetFit, base_fit: SetFit, band: float, progress=None, full_x=None):
         """The backward check (module docstring): an effect that does not earn its place against
         the model without it, or whose size on all data (``full_x``, the fit of ``cur``) is
@@ -423,6 +440,7 @@ class Selector:
         the drop-one fits by name, the chosen names in order of selection, names pruned, rounds)."""
         rounds, order, pruned = [], [], []
         cur, pool = base_fit, list(candidates)
+        self.negligible_names = set()
         full_x, withouts, checked = None, {}, None
         while True:
             done = len(rounds)
