@@ -19,7 +19,7 @@ class DataError(UserError):
         if row is not None:
             where += f", row {row}"
         super().__init__(f"{where}: {message}")
-        self.path, self.column, self.row = str(path), column, row
+        self.path, self.column, self.row, self.message = str(path), column, row, message
 
 
 class ConfigError(UserError):

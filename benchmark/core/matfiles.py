@@ -60,7 +60,18 @@ def read_mat_columns(path: Path, alternatives: Sequence[Sequence[str]], optional
     names = [str(k) for k in doc if not str(k).startswith("__")]
     if not names:
         raise DataError(path, "holds no variables")
-    chosen, keep = select_columns(path, names, alternatives, optional, warn_unused, "variable")
+    try:
+        chosen, keep = select_columns(path, names, alternatives, optional, warn_unused, "variable")
+    except DataError as exc:
+        containers = [k for k in names if isinstance(doc[k], np.ndarray) and doc[k].dtype.kind in "OV"]
+        if not containers:
+            raise
+        first = alternatives[0]
+        raise DataError(path, f"{exc.message}; {containers} hold structs or cell arrays (Simulink's "
+                              f"'Structure With Time'?): save each signal as its own vector named like the columns, "
+                              f"e.g. {first[0]} = simout.time; {first[1]} = simout.signals.values(:, 1); ...; "
+                              f"save('{path.name}', '{first[0]}', '{first[1]}', ..., '-v7')",
+                        column=exc.column) from None
     out = {c: _mat_vector(path, c, doc[c]) for c in keep}
     n = len(out[keep[0]])
     for c in keep[1:]:

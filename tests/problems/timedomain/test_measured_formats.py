@@ -166,6 +166,19 @@ def test_missing_variable_names_the_file_and_the_variable(tmp_path, base_set, na
         assert s in str(err.value), str(err.value)
 
 
+def test_simulink_structure_with_time_says_how_to_save_the_signals(tmp_path, base_set):
+    """Simulink's 'To Workspace' block in 'Structure With Time' format saves one struct whose
+    ``signals.values`` matrix has no column names: the message says how to save named vectors."""
+    v = _startup_vars(base_set)
+    values = np.column_stack([v[c] for c in v if c != "t"])
+    simout = {"time": v["t"], "signals": {"values": values, "dimensions": values.shape[1]}}
+    with pytest.raises(DataError) as err:
+        load_startup_dataset(_mat_set(tmp_path, base_set, {"simout": simout}))
+    msg = str(err.value)
+    assert "startup.mat, column 't'" in msg and "found ['simout']" in msg, msg
+    assert "['simout'] hold structs" in msg and "t = simout.time;" in msg and "'-v7')" in msg, msg
+
+
 def test_a_record_without_a_speed_column_is_a_record_without_a_speed_sensor(tmp_path, base_set):
     """No speed variable: the record loads with its speed all NaN, says so, and keeps the rest."""
     v = _startup_vars(base_set)
