@@ -25,6 +25,10 @@ from benchmark.problems.timedomain.frames import fundamental, phasor_speed
 #: A motor's current lags its voltage by 0-90 degrees; a phase angle outside this window (deg)
 #: is no motor's: labels rotated by 120 degrees move it by 120.
 PHASE_ANGLE_WINDOW = (-30.0, 120.0)
+#: A current lagging the voltage by more than this (deg) returns power to the supply: only a
+#: machine driven above synchronous speed does that (line-to-line voltages under the phase
+#: columns add 30 degrees to a motor's 70-90 at no load).
+GENERATING_LAG = 100.0
 #: Steady-state current over the nameplate's rated current: a motor near no load draws 0.1-1
 #: times it; outside this range it looks wrong (a warning) ...
 CURRENT_RATIO_PLAUSIBLE = (0.05, 2.0)
@@ -65,9 +69,10 @@ def _columns(rec, kind: str) -> str:
     return cols.get(kind, "v_alpha, v_beta" if kind == "voltage" else "i_alpha, i_beta")
 
 
-def check_phase_sequence(rec) -> None:
+def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
     """Voltage and current phasors must turn the same way and the current lag the voltage by a
-    motor's angle; a DataError says which labels to change."""
+    motor's angle; a DataError says which labels to change. A lag beyond :data:`GENERATING_LAG`
+    below synchronous speed (``pole_pairs`` given) is a warning: line-to-line voltages?"""
     tail = _tail(rec)
     t = rec.t[tail]
     v = rec.v_alpha[tail] + 1j * rec.v_beta[tail]
@@ -91,6 +96,8 @@ def check_phase_sequence(rec) -> None:
     angle = math.degrees(math.atan2(S.imag, S.real)) * np.sign(w_e)  # current lag, deg
     lo, hi = PHASE_ANGLE_WINDOW
     if lo <= angle <= hi:
+        if angle > GENERATING_LAG:
+            _warn_generating(rec, angle, abs(w_e), vcols, pole_pairs)
         return
     fixed = {k: (angle - 120.0 * k + 180.0) % 360.0 - 180.0 for k in (1, -1)}
     k = min(fixed, key=lambda k: abs(fixed[k] - 45.0))
@@ -102,6 +109,21 @@ def check_phase_sequence(rec) -> None:
     raise DataError(rec.source, f"the current lags the voltage by {angle:.0f} degrees, which no motor does (0 to 90): "
                                 f"the voltage and current phase labels are rotated by 120 degrees against each other; "
                                 f"{rename} (then the current lags by {fixed[k]:.0f} degrees)", column=vcols)
+
+
+def _warn_generating(rec, angle: float, w_e: float, vcols: str, p: int | None) -> None:
+    """A current lag beyond :data:`GENERATING_LAG` at the record's end: a warning, unless the
+    speed shows the machine driven above synchronous speed (``p`` pole pairs)."""
+    tail = _tail(rec)
+    if rec.has_speed and p and float(np.mean(np.abs(rec.speed[tail]))) > w_e / p:
+        return  # above synchronous speed: a generator returns power, as it should
+    fix = ("name two of them v_rs, v_st (v_R - v_S, v_S - v_T)" if "v_r" in vcols else
+           "give phase (line-to-neutral) voltages")
+    warnings.warn(DataWarning.at(
+        rec.source, f"the current lags the voltage by {angle:.0f} degrees at the record's end, so the machine "
+                    f"returns power to the supply, which a motor below synchronous speed cannot do: are {vcols} "
+                    f"line-to-line voltages (30 degrees ahead of the phase voltages)? Then {fix}",
+        column=vcols), stacklevel=4)
 
 
 def settled(rec) -> bool:
@@ -194,6 +216,6 @@ def check_input_hold(rec, input_hold: str, meta_path) -> None:
 def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold: str, meta_path) -> None:
     """Every check above on every start-up record."""
     for rec in startups:
-        check_phase_sequence(rec)
+        check_phase_sequence(rec, pole_pairs)
         check_scales(rec, nameplate, pole_pairs)
         check_input_hold(rec, input_hold, meta_path)

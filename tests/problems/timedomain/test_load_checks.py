@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 
 from benchmark.core.errors import DataWarning
 from benchmark.problems.timedomain.data import load_startup_dataset
@@ -134,7 +135,8 @@ def test_line_to_line_voltages_given_as_phase_columns_are_told_and_the_fix_reads
     _line_to_line(folder, ("v_r", "v_s", "v_t"))  # v_R - v_S written under v_r, ...
     with pytest.warns(DataWarning) as caught:
         load_startup_dataset(folder)
-    (msg,) = [str(w.message) for w in caught if "line-to-line" in str(w.message)]
+    (msg,) = [str(w.message) for w in caught if "supply voltage" in str(w.message)]
+    assert any("lags the voltage by" in str(w.message) for w in caught)  # the power flow says it too
     assert f"{folder / 'startup.csv'}, column 'v_r, v_s, v_t'" in msg
     ratio = float(re.search(r"is ([\d.]+) times the nameplate's", msg).group(1))
     assert abs(ratio / np.sqrt(3.0) - 1.0) < 0.05, msg
@@ -157,3 +159,22 @@ def test_voltages_in_kilovolts_against_the_nameplate(grid_start):
     msg = _error(_cli(folder))
     assert f"{folder / 'startup.csv'}, column 'v_r, v_s, v_t'" in msg
     assert "supply voltage" in msg and "which cannot be" in msg and "in V" in msg
+
+
+def test_line_to_line_voltages_as_phase_columns_without_a_nameplate_are_told_by_the_power_flow(grid_start):
+    """No nameplate to compare the voltage with: line voltages, 30 degrees ahead of the phase
+    voltages, make the current of a motor near no load lag by more than 90 degrees (power back to
+    the supply) while the rotor turns below synchronous speed."""
+    folder = _mistake(grid_start, "line_as_phase_no_nameplate")
+    _line_to_line(folder, ("v_r", "v_s", "v_t"))
+    meta = yaml.safe_load((folder / "meta.yaml").read_text())
+    meta.pop("nameplate")
+    (folder / "meta.yaml").write_text(yaml.safe_dump(meta))
+    with pytest.warns(DataWarning) as caught:
+        load_startup_dataset(folder)
+    (msg,) = [str(w.message) for w in caught if "line-to-line" in str(w.message)]
+    lag = float(re.search(r"lags the voltage by (\d+) degrees", msg).group(1))
+    assert 100 < lag < 125 and "name two of them v_rs, v_st" in msg, msg
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DataWarning)  # the phase voltages as given: no such warning
+        load_startup_dataset(grid_start)
