@@ -1,5 +1,6 @@
 """Checks on load of a start-up record for mistakes that still produce a result: wiring (phase
-labels swapped or rotated between the voltage and the current channels), units (a current,
+labels swapped or rotated between the voltage and the current channels, a current probe
+reversed), units (a current,
 voltage or speed scale the nameplate contradicts, line-to-line voltages given as phase voltages,
 an inertia the rated power contradicts) and the input hold
 (inverter levels read as a continuous voltage). Each says what is wrong and how to fix it
@@ -20,7 +21,7 @@ import warnings
 import numpy as np
 
 from benchmark.core.errors import DataError, DataWarning
-from benchmark.problems.timedomain.frames import fundamental, phasor_speed
+from benchmark.problems.timedomain.frames import clarke, fundamental, inverse_clarke, phasor_speed
 
 #: A motor's current lags its voltage by 0-90 degrees; a phase angle outside this window (deg)
 #: is no motor's: labels rotated by 120 degrees move it by 120.
@@ -29,6 +30,9 @@ PHASE_ANGLE_WINDOW = (-30.0, 120.0)
 #: machine driven above synchronous speed does that (line-to-line voltages under the phase
 #: columns add 30 degrees to a motor's 70-90 at no load).
 GENERATING_LAG = 100.0
+#: A current whose sequences are mixed is taken for a reversed probe when negating one channel
+#: makes one sequence this many times the other (a healthy record's is hundreds).
+REVERSED_PROBE_RATIO = 10.0
 #: Steady-state current over the nameplate's rated current: a motor near no load draws 0.1-1
 #: times it; outside this range it looks wrong (a warning) ...
 CURRENT_RATIO_PLAUSIBLE = (0.05, 2.0)
@@ -82,9 +86,10 @@ def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
         return
     fwd, bwd = abs(fundamental(i, t, abs(w_e))), abs(fundamental(i, t, -abs(w_e)))
     i_sign = 1.0 if fwd >= bwd else -1.0
-    if max(fwd, bwd) < 3 * min(fwd, bwd):
-        return  # no clear sequence in the currents (a record that ends stopped): nothing to compare
     vcols, icols = _columns(rec, "voltage"), _columns(rec, "current")
+    if max(fwd, bwd) < 3 * min(fwd, bwd):
+        _check_reversed_probe(rec, v, i, t, w_e, icols, fwd, bwd)
+        return  # no clear sequence in the currents (a record that ends stopped): nothing to compare
     if np.sign(w_e) != i_sign:
         swap = ("swap the columns v_s and v_t" if "v_r" in vcols else "negate v_beta")
         raise DataError(rec.source, f"the voltage ({vcols}) and current ({icols}) phase sequences disagree: the "
@@ -109,6 +114,30 @@ def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
     raise DataError(rec.source, f"the current lags the voltage by {angle:.0f} degrees, which no motor does (0 to 90): "
                                 f"the voltage and current phase labels are rotated by 120 degrees against each other; "
                                 f"{rename} (then the current lags by {fixed[k]:.0f} degrees)", column=vcols)
+
+
+def _check_reversed_probe(rec, v, i, t, w_e: float, icols: str, fwd: float, bwd: float) -> None:
+    """Currents ``i`` that hold both sequences (``fwd``, ``bwd``: their phasors at +-``w_e``)
+    where one phase channel negated gives one sequence, the voltage ``v``'s (speed ``w_e``),
+    lagging it by a motor's angle: a probe mounted the wrong way round (a DataError naming the
+    channel to negate). Anything else is left alone (a record that ends stopped)."""
+    if "i_r" not in icols:
+        return  # an alpha-beta channel negated reverses the sequence: the check above tells that
+    i_r, i_s, _ = inverse_clarke(i.real, i.imag)
+    V = fundamental(v, t, w_e)
+    for col, r, s in (("i_r", -i_r, i_s), ("i_s", i_r, -i_s)):
+        a, b = clarke(r, s, -r - s)
+        x = a + 1j * b
+        with_v, against = fundamental(x, t, w_e), abs(fundamental(x, t, -w_e))
+        # the other channel negated is this fix negated (one sequence, 180 degrees off): the fix
+        # is the one whose current lags the voltage by a motor's angle
+        S = V * np.conj(with_v)
+        lag = math.degrees(math.atan2(S.imag, S.real)) * np.sign(w_e)
+        if abs(with_v) >= REVERSED_PROBE_RATIO * against and PHASE_ANGLE_WINDOW[0] <= lag <= PHASE_ANGLE_WINDOW[1]:
+            raise DataError(rec.source, f"the currents ({icols}) hold both phase sequences (forward {fwd:.3g} A, "
+                                        f"backward {bwd:.3g} A at the record's end), which no balanced motor "
+                                        f"draws, and with {col} negated they hold one: is its probe reversed? "
+                                        f"Negate the column {col}", column=col)
 
 
 def _warn_generating(rec, angle: float, w_e: float, vcols: str, p: int | None) -> None:

@@ -178,3 +178,20 @@ def test_line_to_line_voltages_as_phase_columns_without_a_nameplate_are_told_by_
     with warnings.catch_warnings():
         warnings.simplefilter("error", DataWarning)  # the phase voltages as given: no such warning
         load_startup_dataset(grid_start)
+
+
+@pytest.mark.parametrize("column", ["i_r", "i_s"])
+def test_a_reversed_current_probe_is_named(grid_start, column):
+    """One probe mounted the wrong way round: the currents hold both sequences (no balanced motor
+    draws that), so the sequence check had nothing to compare and the record gave a result."""
+    folder = _mistake(grid_start, f"reversed_{column}")
+    table = pd.read_csv(folder / "startup.csv")
+    table[column] *= -1.0
+    table.to_csv(folder / "startup.csv", index=False)
+    msg = _error(_cli(folder))
+    assert f"{folder / 'startup.csv'}, column '{column}'" in msg
+    assert "hold both phase sequences" in msg and f"Negate the column {column}" in msg
+    table[column] *= -1.0  # done as the message says
+    table.to_csv(folder / "startup.csv", index=False)
+    fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
+    assert np.allclose(fixed.i_alpha, ok.i_alpha, rtol=0, atol=1e-12 * np.max(np.abs(ok.i_alpha)))
