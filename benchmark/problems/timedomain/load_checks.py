@@ -1,6 +1,6 @@
 """Checks on load of a start-up record for mistakes that still produce a result: wiring (phase
 labels swapped or rotated between the voltage and the current channels, a current probe
-reversed), units (a current,
+reversed, a speed sign), units (a current,
 voltage or speed scale the nameplate contradicts, line-to-line voltages given as phase voltages,
 an inertia the rated power contradicts) and the input hold
 (inverter levels read as a continuous voltage). Each says what is wrong and how to fix it
@@ -155,6 +155,22 @@ def _warn_generating(rec, angle: float, w_e: float, vcols: str, p: int | None) -
         column=vcols), stacklevel=4)
 
 
+def check_speed_direction(rec, pole_pairs: int) -> None:
+    """A rotor that ends turning against the supply's phase sequence at more than half the
+    synchronous speed is a tachometer wired the other way round (a motor turns with its field):
+    a DataError saying to negate the speed column."""
+    if not rec.has_speed or not pole_pairs:
+        return
+    w_e = electrical_speed(rec)
+    final = float(np.mean(rec.speed[_tail(rec)]))
+    sync = abs(w_e) / pole_pairs
+    if abs(w_e) > 0 and final * np.sign(w_e) < -0.5 * sync:
+        raise DataError(rec.source, f"the rotor ends at {final:.4g} rad/s, against the supply's phase sequence "
+                                    f"(synchronous {np.sign(w_e) * sync:+.4g} rad/s), which a motor does not do: "
+                                    "is the tachometer wired the other way round? Negate the column speed (and "
+                                    "the stop record's)", column="speed")
+
+
 def settled(rec) -> bool:
     """Whether the record ends in a steady state: over its last fifth the speed's (or without a
     speed, the current amplitude's) mean in the first and second halves agree within 2 %. A start
@@ -246,5 +262,6 @@ def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold:
     """Every check above on every start-up record."""
     for rec in startups:
         check_phase_sequence(rec, pole_pairs)
+        check_speed_direction(rec, pole_pairs)
         check_scales(rec, nameplate, pole_pairs)
         check_input_hold(rec, input_hold, meta_path)

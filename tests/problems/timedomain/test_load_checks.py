@@ -195,3 +195,17 @@ def test_a_reversed_current_probe_is_named(grid_start, column):
     table.to_csv(folder / "startup.csv", index=False)
     fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
     assert np.allclose(fixed.i_alpha, ok.i_alpha, rtol=0, atol=1e-12 * np.max(np.abs(ok.i_alpha)))
+
+
+def test_a_speed_of_the_wrong_sign_is_told(grid_start):
+    """A tachometer wired the other way round: the rotor seems to turn against its field; the
+    identification gave a result with eleven warnings (J and Ls at bounds) instead."""
+    folder = _mistake(grid_start, "negative_speed")
+    for name in ("startup.csv", "stop.csv"):
+        if (folder / name).exists():
+            table = pd.read_csv(folder / name)
+            table["speed"] *= -1.0
+            table.to_csv(folder / name, index=False)
+    msg = _error(_cli(folder))
+    assert f"{folder / 'startup.csv'}, column 'speed'" in msg
+    assert "against the supply's phase sequence" in msg and "Negate the column speed" in msg
