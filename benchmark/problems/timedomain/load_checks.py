@@ -33,6 +33,9 @@ GENERATING_LAG = 100.0
 #: A current whose sequences are mixed is taken for a reversed probe when negating one channel
 #: makes one sequence this many times the other (a healthy record's is hundreds).
 REVERSED_PROBE_RATIO = 10.0
+#: Declared and measured supply frequency may differ by this share (a grid's 1 %, and the end
+#: of a record being short of whole periods).
+FREQUENCY_TOLERANCE = 0.05
 #: Steady-state current over the nameplate's rated current: a motor near no load draws 0.1-1
 #: times it; outside this range it looks wrong (a warning) ...
 CURRENT_RATIO_PLAUSIBLE = (0.05, 2.0)
@@ -155,6 +158,18 @@ def _warn_generating(rec, angle: float, w_e: float, vcols: str, p: int | None) -
         column=vcols), stacklevel=4)
 
 
+def check_supply_frequency(rec, declared: float | None, meta_path) -> None:
+    """``supply_frequency`` of meta.yaml (Hz) against the voltage phasor's rotation over the
+    record's last fifth: beyond :data:`FREQUENCY_TOLERANCE` apart, a DataError naming the key
+    (the conditioning and the diagnosis's folds are cut by it)."""
+    measured = abs(electrical_speed(rec)) / (2.0 * math.pi)
+    if not declared or not measured > 0 or abs(measured / declared - 1.0) <= FREQUENCY_TOLERANCE:
+        return
+    raise DataError(meta_path, f"key 'supply_frequency' is {declared:g} Hz, but the voltages of {rec.source} turn "
+                               f"at {measured:.4g} Hz at the record's end: state the supply's frequency "
+                               f"(supply_frequency: {measured:.3g}) or leave the key out")
+
+
 def check_speed_direction(rec, pole_pairs: int) -> None:
     """A rotor that ends turning against the supply's phase sequence at more than half the
     synchronous speed is a tachometer wired the other way round (a motor turns with its field):
@@ -258,9 +273,11 @@ def check_input_hold(rec, input_hold: str, meta_path) -> None:
                        "(the model would otherwise ramp between the levels)", column=None), stacklevel=3)
 
 
-def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold: str, meta_path) -> None:
+def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold: str, meta_path,
+                  supply_frequency: float | None = None) -> None:
     """Every check above on every start-up record."""
     for rec in startups:
+        check_supply_frequency(rec, supply_frequency, meta_path)
         check_phase_sequence(rec, pole_pairs)
         check_speed_direction(rec, pole_pairs)
         check_scales(rec, nameplate, pole_pairs)

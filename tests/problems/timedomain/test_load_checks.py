@@ -209,3 +209,17 @@ def test_a_speed_of_the_wrong_sign_is_told(grid_start):
     msg = _error(_cli(folder))
     assert f"{folder / 'startup.csv'}, column 'speed'" in msg
     assert "against the supply's phase sequence" in msg and "Negate the column speed" in msg
+
+
+def test_a_supply_frequency_the_voltages_contradict_names_the_key(grid_start):
+    """A 50 Hz record declared as 60 Hz (the nameplate's, of a motor run on another grid): the
+    conditioning and the folds are cut by the declared frequency."""
+    folder = _mistake(grid_start, "frequency")
+    meta = yaml.safe_load((folder / "meta.yaml").read_text())
+    assert meta["supply_frequency"] == 50.0
+    meta["supply_frequency"] = 60.0
+    (folder / "meta.yaml").write_text(yaml.safe_dump(meta))
+    msg = _error(_cli(folder))
+    assert f"{folder / 'meta.yaml'}: key 'supply_frequency' is 60 Hz" in msg
+    measured = float(re.search(r"turn at ([\d.]+) Hz", msg).group(1))
+    assert abs(measured - 50.0) < 0.05 and "supply_frequency: 50" in msg, msg
