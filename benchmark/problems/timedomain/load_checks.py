@@ -1,12 +1,12 @@
 """Checks on load of a start-up record for mistakes that still produce a result: wiring (phase
-labels swapped or rotated between the voltage and the current channels, a current probe
-reversed, a speed sign), units (a current,
-voltage or speed scale the nameplate contradicts, line-to-line voltages given as phase voltages,
-an inertia the rated power contradicts) and the input hold
-(inverter levels read as a continuous voltage). Each says what is wrong and how to fix it
-in one line: an error (:class:`~benchmark.core.errors.DataError`, exit status 2) where the data
-cannot be right, a warning (:class:`~benchmark.core.errors.DataWarning`) where they only look
-wrong. Run on the records as read, before the conditioning (:func:`check_records`).
+labels swapped or rotated between the voltage and the current channels, a current probe or a
+tachometer reversed, line-to-line voltages given as phase voltages), units (a current, voltage
+or speed scale the nameplate contradicts, an inertia the rated power contradicts), a supply
+frequency the voltages contradict, and the input hold (inverter levels read as a continuous
+voltage). Each says what is wrong and how to fix it in one line: an error
+(:class:`~benchmark.core.errors.DataError`, exit status 2) where the data cannot be right, a
+warning (:class:`~benchmark.core.errors.DataWarning`) where they only look wrong. Run on the
+records as read, before the conditioning (:func:`check_records`).
 
 The fundamental of a channel is its phasor demodulated at the supply frequency over the record's
 last fifth (a start-up ends near its steady state); the supply frequency is the voltage phasor's
