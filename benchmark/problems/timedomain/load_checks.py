@@ -160,11 +160,17 @@ def _warn_generating(rec, angle: float, w_e: float, vcols: str, p: int | None) -
 
 def check_supply_frequency(rec, declared: float | None, meta_path) -> None:
     """``supply_frequency`` of meta.yaml (Hz) against the voltage phasor's rotation over the
-    record's last fifth: beyond :data:`FREQUENCY_TOLERANCE` apart, a DataError naming the key
-    (the conditioning and the diagnosis's folds are cut by it)."""
+    record's last fifth, where it is steady (the two halves of that fifth within
+    :data:`FREQUENCY_TOLERANCE`: an inverter's V/f ramp cut short of its final frequency is not
+    checked): beyond :data:`FREQUENCY_TOLERANCE` apart, a DataError naming the key (the
+    conditioning and the diagnosis's folds are cut by it)."""
     measured = abs(electrical_speed(rec)) / (2.0 * math.pi)
     if not declared or not measured > 0 or abs(measured / declared - 1.0) <= FREQUENCY_TOLERANCE:
         return
+    tail = np.arange(len(rec.t))[_tail(rec)]
+    halves = [abs(phasor_speed(rec.v_alpha[k], rec.v_beta[k], rec.t[k])) for k in np.array_split(tail, 2)]
+    if abs(halves[1] - halves[0]) > FREQUENCY_TOLERANCE * max(halves):
+        return  # the supply's frequency still moves (a ramp): the record's end says nothing of the key
     raise DataError(meta_path, f"key 'supply_frequency' is {declared:g} Hz, but the voltages of {rec.source} turn "
                                f"at {measured:.4g} Hz at the record's end: state the supply's frequency "
                                f"(supply_frequency: {measured:.3g}) or leave the key out")
