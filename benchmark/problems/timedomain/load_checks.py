@@ -114,9 +114,14 @@ def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
         rename = ("rename v_r, v_s, v_t to v_t, v_r, v_s" if k == 1 else "rename v_r, v_s, v_t to v_s, v_t, v_r")
     else:
         rename = f"rotate the voltage phasor by {-120 * k:+d} degrees (relabel the phases before the Clarke transform)"
+    flipped = (angle + 360.0) % 360.0 - 180.0  # every current probe reversed: 180 degrees off
+    also = ""
+    if 0.0 <= flipped <= 90.0:
+        also = (f"; or every current probe is reversed: negate {icols} (then the current lags by "
+                f"{flipped:.0f} degrees)")
     raise DataError(rec.source, f"the current lags the voltage by {angle:.0f} degrees, which no motor does (0 to 90): "
                                 f"the voltage and current phase labels are rotated by 120 degrees against each other; "
-                                f"{rename} (then the current lags by {fixed[k]:.0f} degrees)", column=vcols)
+                                f"{rename} (then the current lags by {fixed[k]:.0f} degrees){also}", column=vcols)
 
 
 def _check_reversed_probe(rec, v, i, t, w_e: float, icols: str, fwd: float, bwd: float) -> None:

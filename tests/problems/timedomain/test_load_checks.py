@@ -223,3 +223,21 @@ def test_a_supply_frequency_the_voltages_contradict_names_the_key(grid_start):
     assert f"{folder / 'meta.yaml'}: key 'supply_frequency' is 60 Hz" in msg
     measured = float(re.search(r"turn at ([\d.]+) Hz", msg).group(1))
     assert abs(measured - 50.0) < 0.05 and "supply_frequency: 50" in msg, msg
+
+
+def test_every_current_probe_reversed_is_offered_beside_the_relabelling(grid_start):
+    """Both probes reversed put the current 180 degrees off, which the angle alone cannot tell
+    from labels rotated by 120 degrees: the message offers both, and negating the currents as it
+    says restores the record."""
+    folder = _mistake(grid_start, "both_reversed")
+    table = pd.read_csv(folder / "startup.csv")
+    table[["i_r", "i_s"]] *= -1.0
+    table.to_csv(folder / "startup.csv", index=False)
+    msg = _error(_cli(folder))
+    assert "rotated by 120 degrees" in msg and "or every current probe is reversed: negate i_r, i_s" in msg, msg
+    lag = float(re.search(r"negate i_r, i_s \(then the current lags by (\d+) degrees\)", msg).group(1))
+    assert 60 < lag < 90, msg
+    table[["i_r", "i_s"]] *= -1.0  # done as the message says
+    table.to_csv(folder / "startup.csv", index=False)
+    fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
+    assert np.array_equal(fixed.i_alpha, ok.i_alpha) and np.array_equal(fixed.i_beta, ok.i_beta)
