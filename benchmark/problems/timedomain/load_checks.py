@@ -76,6 +76,13 @@ def _columns(rec, kind: str) -> str:
     return cols.get(kind, "v_alpha, v_beta" if kind == "voltage" else "i_alpha, i_beta")
 
 
+def current_lag(v_phasor: complex, i_phasor: complex, w_e: float) -> float:
+    """The angle (deg) by which the current phasor lags the voltage phasor, both taken at the
+    supply's signed speed ``w_e`` (rad/s): positive for a motor's inductive current."""
+    S = v_phasor * np.conj(i_phasor)
+    return math.degrees(math.atan2(S.imag, S.real)) * float(np.sign(w_e))
+
+
 def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
     """Voltage and current phasors must turn the same way and the current lag the voltage by a
     motor's angle; a DataError says which labels to change. A lag beyond :data:`GENERATING_LAG`
@@ -100,8 +107,7 @@ def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
                                     f"phasor {'forwards' if i_sign > 0 else 'backwards'}, so two phase labels are "
                                     f"swapped in one of them; {swap} (or the matching current columns)",
                         column=vcols)
-    S = fundamental(v, t, w_e) * np.conj(fundamental(i, t, w_e))
-    angle = math.degrees(math.atan2(S.imag, S.real)) * np.sign(w_e)  # current lag, deg
+    angle = current_lag(fundamental(v, t, w_e), fundamental(i, t, w_e), w_e)
     lo, hi = PHASE_ANGLE_WINDOW
     if lo <= angle <= hi:
         if angle > GENERATING_LAG:
@@ -139,8 +145,7 @@ def _check_reversed_probe(rec, v, i, t, w_e: float, icols: str, fwd: float, bwd:
         with_v, against = fundamental(x, t, w_e), abs(fundamental(x, t, -w_e))
         # the other channel negated is this fix negated (one sequence, 180 degrees off): the fix
         # is the one whose current lags the voltage by a motor's angle
-        S = V * np.conj(with_v)
-        lag = math.degrees(math.atan2(S.imag, S.real)) * np.sign(w_e)
+        lag = current_lag(V, with_v, w_e)
         if abs(with_v) >= REVERSED_PROBE_RATIO * against and PHASE_ANGLE_WINDOW[0] <= lag <= PHASE_ANGLE_WINDOW[1]:
             raise DataError(rec.source, f"the currents ({icols}) hold both phase sequences (forward {fwd:.3g} A, "
                                         f"backward {bwd:.3g} A at the record's end), which no balanced motor "
