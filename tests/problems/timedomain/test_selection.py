@@ -28,8 +28,8 @@ def _fit(chi2, effects=()):
 
 
 class _Given(Selector):
-    """A selector whose fits are looked up: ``held[frozenset(names)] = chi2``; a pair's screening
-    gives its full value (``screened`` overrides it)."""
+    """A selector whose fits are looked up: ``held[frozenset(names)] = chi2``; a single's or a
+    pair's screening gives its full value (``screened`` overrides it)."""
 
     def __init__(self, held, share=0.5, settings=None, screened=None, refits=None, negligible=()):
         self.settings = settings or DiagnosisSettings()
@@ -45,6 +45,11 @@ class _Given(Selector):
         if refit:
             chi2 = self.held[names] = min(chi2, self.refits.get(names, chi2))
         return _fit(chi2, effects)
+
+    def screen_singles(self, cur, pool):
+        """A single's screening gives its full value unless ``screened`` overrides it."""
+        return {e.name: self.screened.get(frozenset(cur.names + [e.name]), self.held[frozenset(cur.names + [e.name])])
+                for e in pool}
 
     def screen_pairs(self, pool, singles):
         cur = next(iter(singles.values())).names[:-1]
@@ -138,6 +143,28 @@ def test_a_pair_is_fitted_fully_only_where_its_screening_says_it_may_earn():
     sel.forward([LOAD, GAIN], _fit(1000.0), BAND, order, [])
     assert order == [] and ["load_torque", "speed_sensor_gain"] not in sel.fitted
     assert _Given(held).forward([LOAD, GAIN], _fit(1000.0), BAND, order, []).chi2 == 140.0
+
+
+def test_a_round_fits_the_first_screened_and_those_the_screening_says_may_earn_every_candidate_where_none_earns():
+    """Round 1 from 10: the tachometer, screened first (2.0), and the load, whose screening (5.0)
+    also removes more than half of the excess, are fitted fully; the load (2.5) enters, though a linear step
+    rated it below the tachometer (3.0). The coupling's screening (9.0) says it cannot earn: it is
+    not fitted. Round 2: neither earns beside the load, so both are fitted (the pair step needs
+    every single's fit)."""
+    held = {frozenset(): 10.0, frozenset({GAIN.name}): 3.0, frozenset({LOAD.name}): 2.5, frozenset({TWO.name}): 8.0,
+            frozenset({LOAD.name, GAIN.name}): 2.45, frozenset({LOAD.name, TWO.name}): 2.4,
+            frozenset({LOAD.name, GAIN.name, TWO.name}): 2.3}
+    screened = {frozenset({GAIN.name}): 2.0, frozenset({LOAD.name}): 5.0, frozenset({TWO.name}): 9.0}
+    sel = _Given(held, screened=screened)
+    order, rounds = [], []
+    sel.forward([LOAD, GAIN, TWO], _fit(10.0), BAND, order, rounds)
+    assert order == ["load_torque"] and rounds[0]["chosen"] == "load_torque"
+    assert sorted(sel.fitted[:2]) == [["load_torque"], ["speed_sensor_gain"]] and ["two_mass"] not in sel.fitted
+    assert [(r["effect"], r["fitted"]) for r in rounds[0]["screening"]] == [
+        ("speed_sensor_gain", True), ("load_torque", True), ("two_mass", False)]
+    assert {r["effect"] for r in rounds[0]["candidates"]} == {"speed_sensor_gain", "load_torque"}
+    assert ["load_torque", "two_mass"] in sel.fitted and ["load_torque", "speed_sensor_gain"] in sel.fitted
+    assert rounds[1]["chosen"] is None and len(rounds[1]["candidates"]) == 2
 
 
 def test_no_selection_at_the_noise_level_or_beyond_the_cap():

@@ -16,8 +16,14 @@ in a worse basin would charge its misfit to the model).
 Fits are kept by set (:attr:`Selector.memo`): a set reached again starts from its earlier fit
 too and keeps the better, so that a set's score does not hang on the path that reached it.
 
-**Decisions** (:mod:`.rule`): forward, every remaining candidate is fitted with the current set
-and the lowest held-out chi^2 enters when it earns its place; when none does, a pair enters when
+**Decisions** (:mod:`.rule`): forward, every remaining candidate is first screened beside the
+current set by a linearised score test (:meth:`Selector.screen_singles`, from the starts its full
+fit would take); the one screened best and every one the screening says may earn its place are
+fitted fully, and the lowest held-out chi^2 among those enters when it earns its place
+(:meth:`Selector.round_fits`; a linear step under-rates an effect far from linear at its start, a
+leakage inductance that falls with current, so the screening decides which are fitted, never
+which enters). Where
+none of them earns, every candidate is fitted fully; when none earns then, a pair enters when
 each of its two effects earns its place beside the other. Pairs are screened first by linearised
 score tests (:mod:`.score_tests`: one effect added to the other's single fit on fold A, a
 Gauss-Newton step scored on fold B) and fitted fully, best screened first, where the screening
@@ -36,48 +42,17 @@ import itertools
 
 import numpy as np
 
-from benchmark.core.effects import Effect
 from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 from benchmark.problems.timedomain.diagnosis.grid import grid_column, on_grid
 from benchmark.problems.timedomain.diagnosis.rule import Rule, score_difference, share_removed
-from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
+from benchmark.problems.timedomain.diagnosis.screening import Screening
+from benchmark.problems.timedomain.diagnosis.set_fit import FOLDS, SetFit
 
-FOLDS = ("A", "B")
-
-
-class SetFit:
-    """Fold fits of the base plus one set of effects, and their held-out residual."""
-
-    def __init__(self, model: JointModel, xs: dict, masks: dict):
-        self.model = model
-        self.xs = xs
-        n = model.data.n_residuals
-        # residuals the conditioning masked are in neither fold: 0 here, and left out of chi^2
-        self.used = masks["A"] | masks["B"]
-        self.held = np.zeros(n)
-        self.ssr_fold = {}  # in-sample SSR of each fold's fit on its own fold
-        for f, other in (("A", "B"), ("B", "A")):
-            r = model.residuals(xs[f][None, :])[0]
-            self.held[masks[other]] = r[masks[other]]
-            self.ssr_fold[f] = float(np.sum(r[masks[f]] ** 2))
-        self.chi2 = float(np.mean(self.held[self.used] ** 2))
-
-    @property
-    def held_used(self) -> np.ndarray:
-        """The held-out residuals of the samples in a fold (the masked ones left out)."""
-        return self.held[self.used]
-
-    @property
-    def names(self) -> list[str]:
-        return self.model.effect_names
-
-    @property
-    def effects(self) -> list[Effect]:
-        return list(self.model.effects)
+__all__ = ["FOLDS", "NEGLIGIBLE_SHARE", "Selector", "SetFit"]
 
 
-class Selector:
+class Selector(Screening):
     """The fits and decisions of the selection on one data set (module docstring)."""
 
     def __init__(self, data: DiagnosisData, settings, ctx, centre, fc_scale, masks, rule: Rule,
@@ -295,12 +270,13 @@ class Selector:
             pool = [e for e in candidates if e.name not in cur.names and e.name not in self.negligible_names]
             if not pool or cur.chi2 <= band**2 or (cap is not None and len(chosen) >= cap):
                 return cur
-            fits = side_by_side(lambda e, c=chosen, s=cur: self.fit(c + [e], [(s, [s])], progress=progress), pool)
-            trials = {e.name: sf for e, sf in zip(pool, fits, strict=True)}
+            trials, screened = self.round_fits(cur, pool, band, progress)
             rows = sorted((self.row(n, cur, sf, band) for n, sf in trials.items()), key=lambda r: r["heldout_chi2"])
             best = rows[0]
             rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
-                   "heldout_chi2_from": cur.chi2, "candidates": rows, "chosen": None, "indistinguishable": []}
+                   "heldout_chi2_from": cur.chi2, "candidates": rows, "chosen": None, "indistinguishable": [],
+                   "screening": [{"effect": n, "screened_heldout_chi2": v, "fitted": n in trials}
+                                 for n, v in sorted(screened.items(), key=lambda kv: kv[1])]}
             rounds.append(rnd)
             if best["earns"] and self.negligible_on_entry(trials[best["effect"]], best["effect"]):
                 rnd["negligible"] = best["effect"]  # dropped now, not after the rounds beside it
@@ -319,6 +295,24 @@ class Selector:
                 return cur
             names, cur = pair
             order += names
+
+    def round_fits(self, cur: SetFit, pool, band: float, progress=None) -> tuple[dict, dict]:
+        """The fits of one forward round (module docstring): every candidate of ``pool`` screened
+        beside ``cur`` (:meth:`screen_singles`); fitted fully, the one screened best and every one
+        the screening says may earn its place; where none of those earns, every candidate.
+        Returns (fits by name, screened held-out chi^2 by name)."""
+        screened = self.screen_singles(cur, pool)
+        ranked = sorted(pool, key=lambda e: (screened[e.name], e.name))
+        first = ranked[:1] + [e for e in ranked[1:] if self.rule.earns(cur.chi2, screened[e.name], band)]
+
+        def fits_of(effects):
+            done = side_by_side(lambda e, c=cur: self.fit(c.effects + [e], [(c, [c])], progress=progress), effects)
+            return {e.name: sf for e, sf in zip(effects, done, strict=True)}
+
+        fits = fits_of(first)
+        if not any(self.rule.earns(cur.chi2, sf.chi2, band) for sf in fits.values()):
+            fits |= fits_of([e for e in ranked if e.name not in fits])
+        return fits, screened
 
     def pair_step(self, cur: SetFit, pool, singles: dict, band: float, rounds: list, progress=None):
         """Two candidates that each earn their place beside the other, or None (module
@@ -365,31 +359,6 @@ class Selector:
                 rnd["chosen"] = "+".join(names)
                 return names, sf
         return None
-
-    def fold_b(self, sf: SetFit) -> float:
-        """Fold B's held-out chi^2 of ``sf`` (fold B predicted by the fit on fold A)."""
-        return float(np.mean(sf.held[self.masks["B"]] ** 2))
-
-    def screen_pairs(self, pool, singles: dict) -> dict[frozenset, float]:
-        """Fold B's held-out chi^2 each pair of ``pool`` is predicted to reach: the linearised
-        score test (:func:`.score_tests.score_tests`) of adding ``b`` to the single fit of the
-        current set plus ``a`` (on fold A; the masking partner's signature shows once ``a`` is
-        in), the better of the two orders."""
-        def make(effects):  # the parameters in the order given: the fitted set's, then the new effect's
-            return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
-                              self.settings.base_span)
-
-        def given(a):
-            sa = singles[a.name]
-            rows = score_tests(make, sa.effects, sa.xs["A"], self.masks["A"], self.masks["B"],
-                               [(b,) for b in pool if b is not a], self.ctx)
-            return {frozenset((a.name, r["effect"])): r["predicted_heldout_chi2"] for r in rows}
-
-        out: dict[frozenset, float] = {}
-        for part in side_by_side(given, pool):
-            for key, chi2 in part.items():
-                out[key] = min(chi2, out.get(key, np.inf))
-        return out
 
     def negligible(self, sf: SetFit, full_x: np.ndarray) -> list[str]:
         """Names of ``sf``'s effects whose size on all data (``full_x``, :meth:`Effect.fitted_size`)

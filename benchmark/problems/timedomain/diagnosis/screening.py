@@ -1,0 +1,71 @@
+"""Linearised screening of the selection's candidates (:mod:`.score_tests`): what a single
+effect, or a pair, added to the current set is predicted to reach on the held-out samples,
+before (or instead of) a full fit. The decisions that read it are the selection's
+(:meth:`.selection.Selector.round_fits`, :meth:`.selection.Selector.pair_step`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from benchmark.problems.timedomain.diagnosis.engine import side_by_side
+from benchmark.problems.timedomain.diagnosis.fit import JointModel
+from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
+from benchmark.problems.timedomain.diagnosis.set_fit import FOLDS, SetFit
+
+
+class Screening:
+    """The screening part of :class:`.selection.Selector` (it provides ``data``, ``settings``,
+    ``ctx``, ``centre``, ``fc_scale``, ``masks`` and the starts, :meth:`composed` and
+    :meth:`profiled`)."""
+
+    def screen_singles(self, cur: SetFit, pool) -> dict[str, float]:
+        """The held-out chi^2 each candidate of ``pool`` is predicted to reach beside ``cur``:
+        the score test (:func:`.score_tests.score_tests`, its ``score``) of adding it to each
+        fold's fit of ``cur``, linearised at the starts its full fit takes (:meth:`composed`,
+        :meth:`profiled`) and scored on the other fold; the two folds' held-out chi^2 pooled as
+        :attr:`SetFit.chi2` pools them."""
+        def make(effects):  # the parameters in the order given: the fitted set's, then the new effect's
+            return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
+                              self.settings.base_span)
+
+        def fold(f):
+            other = "B" if f == "A" else "A"
+
+            def starts(model, x_fit, new):  # the new effect is the model's last
+                composed = self.composed(model, cur, [cur], f)
+                return self.profiled(model, composed, self.masks[f], [len(model.effects) - 1])
+
+            rows = score_tests(make, cur.effects, cur.xs[f], self.masks[f], self.masks[other],
+                               [(e,) for e in pool], self.ctx, starts=starts)
+            n = int(np.count_nonzero(self.masks[other]))
+            return {r["effect"]: n * r["score"] for r in rows}
+
+        parts = side_by_side(fold, FOLDS)
+        total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
+        return {e.name: (parts[0][e.name] + parts[1][e.name]) / total for e in pool}
+
+    def fold_b(self, sf: SetFit) -> float:
+        """Fold B's held-out chi^2 of ``sf`` (fold B predicted by the fit on fold A)."""
+        return float(np.mean(sf.held[self.masks["B"]] ** 2))
+
+    def screen_pairs(self, pool, singles: dict) -> dict[frozenset, float]:
+        """Fold B's held-out chi^2 each pair of ``pool`` is predicted to reach: the linearised
+        score test (:func:`.score_tests.score_tests`) of adding ``b`` to the single fit of the
+        current set plus ``a`` (on fold A; the masking partner's signature shows once ``a`` is
+        in), the better of the two orders."""
+        def make(effects):  # the parameters in the order given: the fitted set's, then the new effect's
+            return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
+                              self.settings.base_span)
+
+        def given(a):
+            sa = singles[a.name]
+            rows = score_tests(make, sa.effects, sa.xs["A"], self.masks["A"], self.masks["B"],
+                               [(b,) for b in pool if b is not a], self.ctx)
+            return {frozenset((a.name, r["effect"])): r["predicted_heldout_chi2"] for r in rows}
+
+        out: dict[frozenset, float] = {}
+        for part in side_by_side(given, pool):
+            for key, chi2 in part.items():
+                out[key] = min(chi2, out.get(key, np.inf))
+        return out
+
