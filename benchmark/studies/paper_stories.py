@@ -131,8 +131,8 @@ def story_double_cage(figdir: Path, outdir: Path) -> list[str]:
     lines = ["## Early start-up speed misfit explained by a double cage (Alonge et al. Fig. 20)", "",
              "Synthetic start-up of the paper's motor with a double cage (resistance rise 0.67, tau2 = 4 ms), "
              "noisy preset; base model = the paper's full model (Coulomb friction from the stop, case 2).", "",
-             f"- Diagnosis verdict: **{doc['verdict']}** (held-out misfit reduction "
-             f"{100 * top['heldout_reduction']:.0f} %; held-out RMS residual over noise "
+             f"- Diagnosis verdict: **{doc['verdict']}** (share of the held-out excess removed "
+             f"{100 * top['excess_reduction']:.0f} %; held-out RMS residual over noise "
              f"{doc['gap_before']['heldout_rms_over_noise']:.2f} -> {doc['gap_after']['heldout_rms_over_noise']:.2f}).",
              f"- Speed misfit over the first 100 ms: RMS {rms_b:.2f} rad/s with the single-cage model "
              f"(mean {mean_b:+.2f} rad/s: the model {'under' if mean_b > 0 else 'over'}-predicts the speed), "
