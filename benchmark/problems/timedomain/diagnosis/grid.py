@@ -12,7 +12,8 @@ from benchmark.core.effects import EffectContext
 from benchmark.problems.timedomain.diagnosis.fit import JointModel
 
 
-def on_grid(model: JointModel, x0, mask, effects, ctx: EffectContext, values=None) -> np.ndarray:
+def on_grid(model: JointModel, x0, mask, effects, ctx: EffectContext, values=None,
+            cache: dict | None = None) -> np.ndarray:
     """``x0`` with the grid parameter of each of ``effects`` (indices into ``model.effects``)
     set to the grid value (``values[name]`` when given, else :meth:`Effect.start_grid`'s)
     that fits ``mask`` best, all values evaluated in one batch. Where the effect names a size
@@ -20,22 +21,45 @@ def on_grid(model: JointModel, x0, mask, effects, ctx: EffectContext, values=Non
     (:func:`sized`): judged at the start's size alone, an instant is best where that size
     changes least (independent plant, a DC generator loaded from the start and read by the
     base as viscous friction: a step of the start's size at 0.949 s, inside the other fold's
-    last block). ``x0`` as it was wins ties."""
+    last block). ``x0`` as it was wins ties.
+
+    ``cache``: a dict for one model and one ``mask``, in which each grid's best row is kept by
+    the start's other parameters: starts that differ only in the grid parameter (a load step's
+    starts at several instants; a round's screening and its fits from the same start) share
+    one evaluation of the grid. The result is the same with or without it."""
     x = np.asarray(x0, float)
     for j in effects:
         eff = model.effects[j]
         col = grid_column(model, j, ctx)
         grid = np.atleast_1d(values[eff.name] if values else eff.start_grid(ctx)[1])
-        X = np.repeat(x[None, :], len(grid) + 1, axis=0)
-        X[1:, col] = grid
-        X = np.clip(X, model.lower, model.upper)
-        if eff.grid_size is not None:
-            at_size, ssr = sized(model, X, mask, model.slices[j].start + eff.grid_size)
-            X, ssr = np.vstack([X, at_size]), np.concatenate([ssr, batched_ssr(model, at_size, mask)])
-        else:
-            ssr = batched_ssr(model, X, mask)
-        x = X[int(np.argmin(ssr))]
+        size = None if eff.grid_size is None else model.slices[j].start + eff.grid_size
+        here = _judged(model, np.clip(x, model.lower, model.upper)[None, :], mask, size)
+        key = (col, np.delete(x, col).tobytes(), np.asarray(grid, float).tobytes())
+        best = cache.get(key) if cache is not None else None
+        if best is None:
+            X = np.repeat(x[None, :], len(grid), axis=0)
+            X[:, col] = grid
+            best = _judged(model, np.clip(X, model.lower, model.upper), mask, size)
+            if cache is not None:
+                cache[key] = best
+        # in the order of one batch [x, grid, x at its size, grid at its size]: the first lowest wins
+        options = [here[0], best[0]] + ([here[1], best[1]] if size is not None else [])
+        x = options[int(np.argmin([o[1] for o in options]))][0]
     return x
+
+
+def _judged(model: JointModel, X: np.ndarray, mask, size: int | None) -> list[tuple[np.ndarray, float]]:
+    """The row of ``X`` that fits ``mask`` best (the first where equal) with what the fits
+    minimise there; where ``size`` is a column, also the best row with that size moved to its
+    best (:func:`sized`)."""
+    def first_lowest(rows, ssr):
+        k = int(np.argmin(ssr))
+        return rows[k], ssr[k]
+
+    if size is None:
+        return [first_lowest(X, batched_ssr(model, X, mask))]
+    at_size, ssr = sized(model, X, mask, size)
+    return [first_lowest(X, ssr), first_lowest(at_size, batched_ssr(model, at_size, mask))]
 
 
 def batched_ssr(model: JointModel, X: np.ndarray, mask) -> np.ndarray:

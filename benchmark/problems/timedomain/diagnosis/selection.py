@@ -61,6 +61,7 @@ class Selector(Screening):
         self.centre, self.fc_scale, self.masks, self.rule = centre, fc_scale, masks, rule
         self.order = dict(order or {})  # effect name -> place in the catalogue (a model's parameter order)
         self.memo: dict[frozenset, SetFit] = {}
+        self.grids: dict = {}  # (model's effects, fold mask) -> its start grids' best rows (:func:`.grid.on_grid`)
         self.refitted: set = set()  # (set, its sources' sets) already refitted: a refit from them again is the same
         self.base_full: np.ndarray | None = None  # the base fitted on all data (set by the pipeline)
         self.input_noise = None  # what the measured voltage's noise adds to each channel (the pipeline's)
@@ -210,9 +211,11 @@ class Selector(Screening):
     def profiled(self, model: JointModel, starts, mask, effects) -> list[np.ndarray]:
         """``starts`` with the grid parameter of each of ``effects`` (indices into
         ``model.effects``) that has one (:meth:`Effect.start_grid`) set to the grid value that
-        fits ``mask`` best (:func:`.grid.on_grid`), followed by the starts as they were."""
+        fits ``mask`` best (:func:`.grid.on_grid`, its grids kept in :attr:`grids`: a round's
+        screening and its fits profile the same starts), followed by the starts as they were."""
         effects = [j for j in effects if model.effects[j].start_grid(self.ctx) is not None]
-        moved = [on_grid(model, x0, mask, effects, self.ctx) for x0 in starts] if effects else []
+        cache = self.grids.setdefault((tuple(model.effect_names), id(mask)), {}) if effects else None
+        moved = [on_grid(model, x0, mask, effects, self.ctx, cache=cache) for x0 in starts] if effects else []
         return _distinct(moved + [np.asarray(x0, float) for x0 in starts])
 
     def cross_start(self, sf: SetFit, points=()) -> SetFit:
