@@ -216,8 +216,8 @@ def render_markdown(doc: dict) -> str:
         for r in rnd["candidates"]:
             lines.append(f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
                          f"| {'yes' if r['earns'] else 'no'} |")
-        lines += [f"| {r['effect']} | screened {r['screened_heldout_chi2']:.3f}, not fitted (above the best fit) | | |"
-                  for r in rnd.get("screening", []) if not r["fitted"]]
+        lines += [f"| {r['effect']} | screened {r['screened_heldout_chi2']:.3f} | | not fitted (its screening removes "
+                  "less than the share; another earns) |" for r in rnd.get("screening", []) if not r["fitted"]]
         if rnd.get("negligible"):
             lines += ["", f"`{rnd['negligible']}` earns its place, but fitted on all data its size is negligible "
                           "(below a tenth of the smallest realistic one): out of the candidates."]
