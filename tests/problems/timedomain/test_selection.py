@@ -46,6 +46,9 @@ class _Given(Selector):
             chi2 = self.held[names] = min(chi2, self.refits.get(names, chi2))
         return _fit(chi2, effects)
 
+    def fits(self, jobs, progress=None):
+        return [self.fit(effects, sources, refit) for effects, sources, refit in jobs]
+
     def screen_singles(self, cur, pool):
         """A single's screening gives its full value unless ``screened`` overrides it."""
         return {e.name: self.screened.get(frozenset(cur.names + [e.name]), self.held[frozenset(cur.names + [e.name])])

@@ -85,6 +85,31 @@ class Selector(Screening):
         effects none holds take their own starts). A set already fitted is returned as it is,
         unless ``refit``: then it is fitted again from ``sources`` and its earlier fit, the better
         kept per fold (once per set of sources: again, the earlier refit is returned)."""
+        return self.fits([(effects, sources, refit)], progress)[0]
+
+    def fits(self, jobs, progress=None) -> list[SetFit]:
+        """:meth:`fit` of each ``(effects, sources, refit)`` of ``jobs`` (distinct sets), every
+        fold fit of every set side by side (a set's two folds need not wait for another set's),
+        then each set's folds agreed and cross-started."""
+        plans = [self._plan(effects, sources, refit, progress) for effects, sources, refit in jobs]
+        todo = [(p, f) for p in plans if not isinstance(p, SetFit) for f in FOLDS]
+        done = side_by_side(lambda item: item[0]["fold_fit"](item[1]), todo)
+        xs: dict = {}
+        for (p, f), x in zip(todo, done, strict=True):
+            xs.setdefault(id(p), {})[f] = x
+
+        def finish(p):
+            sf = self.cross_start(SetFit(p["model"], self.agreed(p["model"], xs[id(p)]), self.masks))
+            self.memo[p["key"]] = sf
+            return sf
+
+        pending = [p for p in plans if not isinstance(p, SetFit)]
+        finished = dict(zip(map(id, pending), side_by_side(finish, pending), strict=True))
+        return [p if isinstance(p, SetFit) else finished[id(p)] for p in plans]
+
+    def _plan(self, effects, sources, refit: bool, progress=None):
+        """The memo's fit of ``effects`` where :meth:`fit` returns it as it is, else what its
+        fold fits need: ``model``, ``key`` and ``fold_fit(fold)``."""
         model = self.model(effects)
         key = frozenset(model.effect_names)
         old = self.memo.get(key)
@@ -105,10 +130,7 @@ class Selector(Screening):
                 starts.append(old.xs[f])
             return self.best(model, starts, self.masks[f])
 
-        xs = self.agreed(model, dict(zip(FOLDS, side_by_side(fold_fit, FOLDS), strict=True)))
-        sf = self.cross_start(SetFit(model, xs, self.masks))
-        self.memo[key] = sf
-        return sf
+        return {"model": model, "key": key, "fold_fit": fold_fit}
 
     def best(self, model: JointModel, starts, mask, held: dict[int, float] | None = None) -> np.ndarray:
         """Every start fitted briefly (``screen_iterations``); the one that ends lowest on
@@ -309,7 +331,7 @@ class Selector(Screening):
         first = ranked[:1] + [e for e in ranked[1:] if self.rule.earns(cur.chi2, screened[e.name], band)]
 
         def fits_of(effects):
-            done = side_by_side(lambda e, c=cur: self.fit(c.effects + [e], [(c, [c])], progress=progress), effects)
+            done = self.fits([(cur.effects + [e], [(cur, [cur])], False) for e in effects], progress)
             return {e.name: sf for e, sf in zip(effects, done, strict=True)}
 
         fits = fits_of(first)
@@ -392,11 +414,8 @@ class Selector(Screening):
         pruned = []
         small = self.negligible(cur, full_x) if full_x is not None else []
         while cur.names:
-            def drop(e, cur=cur):
-                rest = [x for x in cur.effects if x is not e]
-                return self.fit(rest, [(cur, [cur]), (base_fit, [cur])], refit=True, progress=progress)
-
-            fits = side_by_side(drop, cur.effects)
+            fits = self.fits([([x for x in cur.effects if x is not e], [(cur, [cur]), (base_fit, [cur])], True)
+                              for e in cur.effects], progress)
             withouts = {e.name: w for e, w in zip(cur.effects, fits, strict=True)}
             failing = [n for n, w in withouts.items() if not self.rule.earns(w.chi2, cur.chi2, band) or n in small]
             if not failing:
