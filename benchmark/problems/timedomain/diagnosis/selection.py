@@ -22,9 +22,9 @@ fit would take); the one screened best and every one the screening says may earn
 fitted fully, and the lowest held-out chi^2 among those enters when it earns its place
 (:meth:`Selector.round_fits`; a linear step under-rates an effect far from linear at its start, a
 leakage inductance that falls with current, so the screening decides which are fitted, never
-which enters). Where
-none of them earns, every candidate is fitted fully; when none earns then, a pair enters when
-each of its two effects earns its place beside the other. Pairs are screened first by linearised
+which enters). Where none of them earns, every candidate is fitted fully; when none earns then,
+a pair enters when each of its two effects earns its place beside the other. Pairs are screened
+first by linearised
 score tests (:mod:`.score_tests`: one effect added to the other's single fit on fold A, a
 Gauss-Newton step scored on fold B) and fitted fully, best screened first, where the screening
 says both may earn. Backward, every chosen effect must earn its place beside the others (each
