@@ -18,16 +18,18 @@ class Screening:
     ``ctx``, ``centre``, ``fc_scale``, ``masks`` and the starts, :meth:`composed` and
     :meth:`profiled`)."""
 
+    def in_given_order(self, effects) -> JointModel:
+        """The model of ``effects`` with the parameters in the order given (the fitted set's, then
+        the new effects'), as the score tests read them; :meth:`model` orders by the catalogue."""
+        return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
+                          self.settings.base_span)
+
     def screen_singles(self, cur: SetFit, pool) -> dict[str, float]:
         """The held-out chi^2 each candidate of ``pool`` is predicted to reach beside ``cur``:
         the score test (:func:`.score_tests.score_tests`, its ``score``) of adding it to each
         fold's fit of ``cur``, linearised at the starts its full fit takes (:meth:`composed`,
         :meth:`profiled`) and scored on the other fold; the two folds' held-out chi^2 pooled as
         :attr:`SetFit.chi2` pools them."""
-        def make(effects):  # the parameters in the order given: the fitted set's, then the new effect's
-            return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
-                              self.settings.base_span)
-
         def fold(f):
             other = "B" if f == "A" else "A"
 
@@ -35,7 +37,7 @@ class Screening:
                 composed = self.composed(model, cur, [cur], f)
                 return self.profiled(model, composed, self.masks[f], [len(model.effects) - 1])
 
-            rows = score_tests(make, cur.effects, cur.xs[f], self.masks[f], self.masks[other],
+            rows = score_tests(self.in_given_order, cur.effects, cur.xs[f], self.masks[f], self.masks[other],
                                [(e,) for e in pool], self.ctx, starts=starts)
             n = int(np.count_nonzero(self.masks[other]))
             return {r["effect"]: n * r["score"] for r in rows}
@@ -53,13 +55,9 @@ class Screening:
         score test (:func:`.score_tests.score_tests`) of adding ``b`` to the single fit of the
         current set plus ``a`` (on fold A; the masking partner's signature shows once ``a`` is
         in), the better of the two orders."""
-        def make(effects):  # the parameters in the order given: the fitted set's, then the new effect's
-            return JointModel(self.data, self.settings.base_case, list(effects), self.ctx, self.centre, self.fc_scale,
-                              self.settings.base_span)
-
         def given(a):
             sa = singles[a.name]
-            rows = score_tests(make, sa.effects, sa.xs["A"], self.masks["A"], self.masks["B"],
+            rows = score_tests(self.in_given_order, sa.effects, sa.xs["A"], self.masks["A"], self.masks["B"],
                                [(b,) for b in pool if b is not a], self.ctx)
             return {frozenset((a.name, r["effect"])): r["predicted_heldout_chi2"] for r in rows}
 
