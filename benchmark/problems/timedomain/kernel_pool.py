@@ -1,6 +1,7 @@
 """The thread pool the compiled kernels' blocks run on (the block functions release the GIL),
-and the switch that keeps a thread's kernel calls on that thread alone (:class:`serial_kernels`,
-for workers of a pool that already runs jobs side by side on every core).
+and the budget of threads a thread's kernel calls may use (:class:`kernel_budget`: a worker of a
+pool that runs jobs side by side on every core uses its own, and the cores of workers that
+have nothing left to do).
 """
 
 from __future__ import annotations
@@ -27,27 +28,39 @@ def shared_executor(workers: int) -> ThreadPoolExecutor:
         return st["pool"]
 
 
-_serial = threading.local()
+_share = threading.local()
 
 
 def kernel_threads() -> int:
-    """Threads a batched kernel call may use: numba's thread count, or 1 in a thread that runs
-    its own share of a parallel job (:func:`serial_kernels`)."""
-    return 1 if getattr(_serial, "on", False) else numba.get_num_threads()
+    """Threads a batched kernel call may use: numba's thread count, or what this thread's
+    :class:`kernel_budget` allows (at least 1)."""
+    budget = getattr(_share, "budget", None)
+    n = numba.get_num_threads()
+    return n if budget is None else max(1, min(n, int(budget())))
 
 
-class serial_kernels:
-    """Context: kernel calls made by this thread run on this thread alone (a worker of a pool
-    that already runs jobs side by side on every core)."""
+class kernel_budget:
+    """Context: kernel calls made by this thread use at most ``budget()`` threads, asked at each
+    call (a worker of a pool that runs jobs side by side takes one core while the other
+    workers are busy, and the idle workers' cores once they are not). A row's outputs do not
+    depend on how the rows are split, so the results do not depend on the budget."""
+
+    def __init__(self, budget):
+        self.budget = budget
 
     def __enter__(self):
-        self._was = getattr(_serial, "on", False)
-        _serial.on = True
+        self._was = getattr(_share, "budget", None)
+        _share.budget = self.budget
         return self
 
     def __exit__(self, *exc):
-        _serial.on = self._was
+        _share.budget = self._was
         return False
+
+
+def serial_kernels() -> kernel_budget:
+    """Context: kernel calls made by this thread run on this thread alone."""
+    return kernel_budget(lambda: 1)
 
 
 def run_split(block_fn, n: int, *args) -> None:

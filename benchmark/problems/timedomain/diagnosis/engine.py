@@ -4,9 +4,11 @@ The fits of one selection round (each candidate's fold fits from its starts, eac
 look-ahead, each drop-one refit of the backward check) do not depend on one another. They run
 on a pool of worker threads, one per numba thread (``numba.get_num_threads()``, 2 on the
 project's CI machine): the extended model's kernel and NumPy's array operations release the
-GIL, so the workers' simulations and residuals proceed together, and inside a worker every
-kernel call stays on that worker's core (:func:`~benchmark.problems.timedomain.kernel_pool.serial_kernels`),
-where called from the main thread a kernel call splits its rows over the cores instead.
+GIL, so the workers' simulations and residuals proceed together. Inside a worker a kernel call
+stays on that worker's core while every worker has a call to run, and splits its rows over the
+idle workers' cores once the calls left are fewer than the workers (:class:`_Batch`,
+:class:`~benchmark.problems.timedomain.kernel_pool.kernel_budget`); called from the main thread
+a kernel call splits its rows over all cores.
 
 Every fit computes exactly what it computes alone: the results, and so every verdict, are the
 same bit for bit whatever the number of workers and the order in which they finish
@@ -29,7 +31,7 @@ from contextlib import contextmanager
 
 import numba
 
-from benchmark.problems.timedomain.kernel_pool import serial_kernels
+from benchmark.problems.timedomain.kernel_pool import kernel_budget
 
 _local = threading.local()
 _pool_state: dict = {"pool": None, "pid": None, "workers": 0}
@@ -59,13 +61,27 @@ def _executor(n: int) -> ThreadPoolExecutor:
         return st["pool"]
 
 
-def _in_worker(fn: Callable, item):
-    _local.worker = True
-    try:
-        with serial_kernels():
-            return fn(item)
-    finally:
-        _local.worker = False
+class _Batch:
+    """The calls of one :func:`side_by_side` not yet ended, and the kernel threads each running
+    call may use: one core each while as many calls remain as there are workers, the cores of
+    idle workers shared among the calls left (the last call of a round's fits, a long fold fit,
+    no longer runs on one core while the other idles)."""
+
+    def __init__(self, n_items: int, n_workers: int):
+        self.left, self.workers, self._lock = n_items, n_workers, threading.Lock()
+
+    def threads(self) -> int:
+        return max(1, self.workers // max(1, self.left))
+
+    def run(self, fn: Callable, item):
+        _local.worker = True
+        try:
+            with kernel_budget(self.threads):
+                return fn(item)
+        finally:
+            _local.worker = False
+            with self._lock:
+                self.left -= 1
 
 
 def side_by_side(fn: Callable, items: Iterable) -> list:
@@ -78,7 +94,8 @@ def side_by_side(fn: Callable, items: Iterable) -> list:
         return [fn(item) for item in items]
     pool = _executor(n)
     with quiet():
-        futures = [pool.submit(_in_worker, fn, item) for item in items]
+        batch = _Batch(len(items), n)
+        futures = [pool.submit(batch.run, fn, item) for item in items]
         errors = [f.exception() for f in futures]
     for err in errors:
         if err is not None:
