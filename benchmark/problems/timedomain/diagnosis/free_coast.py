@@ -9,8 +9,9 @@ stopped (passive torques hold it).
 The profiled start of the coast (:meth:`benchmark.problems.timedomain.diagnosis.fit.JointModel.recorded_stop`)
 evaluates the coast of the same rows from three starting speeds; :class:`FreeCoast` computes
 what does not depend on the start (the decay ``exp(-t/tau)`` over the whole record, the
-costly part) once per rows, and :meth:`FreeCoast.speed` gives the speed from each start with
-the same operations as evaluating the closed form afresh (the same numbers, bit for bit).
+costly part, and with a fan load the tangent's phase ``q t / (2 J)``) once per rows, and
+:meth:`FreeCoast.speed` gives the speed from each start with the same operations as
+evaluating the closed form afresh (the same numbers, bit for bit).
 """
 
 from __future__ import annotations
@@ -33,8 +34,9 @@ class FreeCoast:
         if np.any(self.fan):
             self.fan_terms = (A[self.fan], C[self.fan], J[self.fan], fv[self.fan])
             with np.errstate(all="ignore"):
-                Af, Cf, _, fvf = self.fan_terms
+                Af, Cf, Jf, fvf = self.fan_terms
                 self.q = np.sqrt((4 * Af * Cf - fvf**2).astype(complex))
+                self.turn = self.q * self.t / (2 * Jf)  # the tangent's phase q t / (2 J), the same from every start
 
     def speed(self, w0: np.ndarray) -> np.ndarray:
         """Speed (n, N) rad/s from the speed ``w0`` (n, 1) at the coast's start, 0 from where it
@@ -44,10 +46,10 @@ class FreeCoast:
         with np.errstate(all="ignore"):
             w = _decayed(np.ascontiguousarray(w0[:, 0]), (self.tau * self.c)[:, 0], self.decay)
             if np.any(self.fan):
-                _, Cf, Jf, fvf = self.fan_terms
+                _, Cf, _, fvf = self.fan_terms
                 w0f, q = w0[self.fan], self.q
                 phi0 = np.arctan((2 * Cf * w0f + fvf) / q)
-                w[self.fan] = np.real((-fvf + q * np.tan(phi0 - q * self.t / (2 * Jf))) / (2 * Cf))
+                w[self.fan] = np.real((-fvf + q * np.tan(phi0 - self.turn)) / (2 * Cf))
         return at_rest_once_stopped(w)
 
 
