@@ -16,7 +16,7 @@ from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
 from benchmark.problems.timedomain.diagnosis.pipeline import base_context, friction_scale
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch
-from benchmark.problems.timedomain.kernel_pool import serial_kernels
+from benchmark.problems.timedomain.kernel_pool import kernel_threads, serial_kernels
 from tests.conftest import PAPER_MOTOR, compose_config
 
 EFFECTS = load_effects("timedomain")
@@ -47,6 +47,37 @@ def test_side_by_side_keeps_order_runs_on_workers_and_nests_in_place(monkeypatch
     with pytest.raises(ZeroDivisionError):
         engine.side_by_side(lambda k: 1 / k, (1, 0, 2))
 
+
+
+def test_a_workers_kernels_take_one_core_while_every_worker_is_busy_and_the_idle_cores_after(monkeypatch):
+    monkeypatch.setattr(engine.numba, "get_num_threads", lambda: 2)
+    monkeypatch.setattr("benchmark.problems.timedomain.kernel_pool.numba.get_num_threads", lambda: 2)
+    monkeypatch.setenv("IMBENCH_FIT_WORKERS", "2")
+    first_done = threading.Event()
+    seen = {}
+
+    def job(k):
+        if k == 0:  # ends first
+            seen[0] = kernel_threads()
+            return
+        first_done.wait(5.0)
+        for _ in range(500):  # its end is counted just after it returns
+            if kernel_threads() == 2:
+                break
+            threading.Event().wait(0.01)
+        seen["alone"] = kernel_threads()
+
+    def run(k):
+        try:
+            job(k)
+        finally:
+            if k == 0:
+                first_done.set()
+
+    engine.side_by_side(run, (0, 1))
+    assert seen[0] == 1 and seen["alone"] == 2
+    assert kernel_threads() == 2  # the calling thread: every core
+    assert engine.side_by_side(lambda k: kernel_threads(), (0, 1, 2, 3))[0] == 1  # four calls on two workers
 
 def test_kernel_cache_gives_the_kernels_outputs_and_simulates_each_row_once(offset_record):
     data = offset_record[0]
