@@ -181,3 +181,35 @@ def test_a_fit_holds_a_parameter_whose_bounds_coincide(offset_record):
     assert x[k] == x0[k]
     assert np.all(x >= model.lower) and np.all(x <= model.upper)
     assert model.ssr(x) < model.ssr(x0)  # the others moved
+
+
+def test_a_candidate_screened_beside_the_same_fit_again_is_not_simulated_again(offset_record):
+    """The round after an effect negligible on entry starts from the same fit: the screening of
+    the candidates already screened beside it is kept (each depends on that fit and the
+    candidate alone); a candidate not screened yet is, and gets what it gets screened alone."""
+    from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings
+    from benchmark.problems.timedomain.diagnosis.rule import Rule
+    from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
+
+    data, ctx, fcs = offset_record
+    a, b = data.folds()
+    masks = {"A": a, "B": b}
+
+    def selector():
+        return Selector(data, DiagnosisSettings(), ctx, dict(TRUE), fcs, masks, Rule(0.3),
+                        {n: k for k, n in enumerate(EFFECTS)})
+
+    sel = selector()
+    base = sel.model([])
+    x = np.array([TRUE[n] for n in base.base_names])
+    cur = SetFit(base, {"A": x, "B": x}, masks)
+    offset, coupling, drift = EFFECTS["sensor_offset"], EFFECTS["two_mass"], EFFECTS["temperature_drift"]
+    first = sel.screen_singles(cur, [offset, coupling])
+    simulated = data.kernel.simulated
+    assert sel.screen_singles(cur, [coupling, offset]) == {"two_mass": first["two_mass"],
+                                                           "sensor_offset": first["sensor_offset"]}
+    assert data.kernel.simulated == simulated  # nothing simulated again
+    assert first["sensor_offset"] < first["two_mass"]  # the injected offsets screen best
+    more = sel.screen_singles(cur, [offset, drift])
+    assert data.kernel.simulated > simulated and more["sensor_offset"] == first["sensor_offset"]
+    assert more["temperature_drift"] == selector().screen_singles(cur, [drift])["temperature_drift"]

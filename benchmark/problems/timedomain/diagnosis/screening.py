@@ -15,8 +15,8 @@ from benchmark.problems.timedomain.diagnosis.set_fit import FOLDS, SetFit
 
 class Screening:
     """The screening part of :class:`.selection.Selector` (it provides ``data``, ``settings``,
-    ``ctx``, ``centre``, ``fc_scale``, ``masks`` and the starts, :meth:`composed` and
-    :meth:`profiled`)."""
+    ``ctx``, ``centre``, ``fc_scale``, ``masks``, the starts, :meth:`composed` and
+    :meth:`profiled`, and ``screened_beside``, a dict)."""
 
     def in_given_order(self, effects) -> JointModel:
         """The model of ``effects`` with the parameters in the order given (the fitted set's, then
@@ -29,7 +29,13 @@ class Screening:
         the score test (:func:`.score_tests.score_tests`, its ``score``) of adding it to each
         fold's fit of ``cur``, linearised at the starts its full fit takes (:meth:`composed`,
         :meth:`profiled`) and scored on the other fold; the two folds' held-out chi^2 pooled as
-        :attr:`SetFit.chi2` pools them."""
+        :attr:`SetFit.chi2` pools them. Each candidate's test depends on ``cur``'s fit and the
+        candidate alone: kept in ``screened_beside`` (a round that starts from the same fit again,
+        after an effect negligible on entry left, screens only what it has not)."""
+        key = (tuple(cur.names), *(cur.xs[f].tobytes() for f in FOLDS))
+        kept = self.screened_beside.setdefault(key, {})
+        todo = [e for e in pool if e.name not in kept]
+
         def fold(f):
             other = "B" if f == "A" else "A"
 
@@ -38,13 +44,15 @@ class Screening:
                 return self.profiled(model, composed, self.masks[f], [len(model.effects) - 1])
 
             rows = score_tests(self.in_given_order, cur.effects, cur.xs[f], self.masks[f], self.masks[other],
-                               [(e,) for e in pool], self.ctx, starts=starts)
+                               [(e,) for e in todo], self.ctx, starts=starts)
             n = int(np.count_nonzero(self.masks[other]))
             return {r["effect"]: n * r["score"] for r in rows}
 
-        parts = side_by_side(fold, FOLDS)
-        total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
-        return {e.name: (parts[0][e.name] + parts[1][e.name]) / total for e in pool}
+        if todo:
+            parts = side_by_side(fold, FOLDS)
+            total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
+            kept |= {e.name: (parts[0][e.name] + parts[1][e.name]) / total for e in todo}
+        return {e.name: kept[e.name] for e in pool}
 
     def fold_b(self, sf: SetFit) -> float:
         """Fold B's held-out chi^2 of ``sf`` (fold B predicted by the fit on fold A)."""
