@@ -55,9 +55,14 @@ class KernelCache:
         if todo:
             first = [js[0] for js in todo.values()]
             sim = simulate_extended_batch(rows[first], self.v_a, self.v_b, self.linear, self.h, 1)
-            with self._lock:
-                for m, (key, js) in enumerate(todo.items()):
+            if len(first) == len(rows):  # every row new and distinct: the batch is the output
+                out = sim
+            else:
+                for m, js in enumerate(todo.values()):
                     out[js] = sim[m]
+            with self._lock:
+                # only the last ``size`` new rows can stay (the older would be dropped at once)
+                for m, key in list(enumerate(todo))[-self.size:]:
                     self._kept[key] = sim[m].copy()
                     self._kept.move_to_end(key)
                 while len(self._kept) > self.size:
