@@ -22,16 +22,17 @@ fit would take); the one screened best, every one the screening says may earn it
 every one it could not assess (screened no lower than the current set) are fitted fully, and
 the lowest held-out chi^2 among those enters when it earns its place
 (:meth:`Selector.round_fits`; a linear step under-rates an effect far from linear at its start, a
-leakage inductance that falls with current, so the screening decides which are fitted, never
-which enters). Where none of them earns, every candidate is fitted fully; when none earns then,
-a pair enters when each of its two effects earns its place beside the other. Pairs are screened
+leakage inductance that falls with current, an inverter's drop; one it places below the current
+set but under-rates is not fitted where another earns: there the screening decides which
+enters). Where none of them earns, every candidate is fitted fully; when none earns then, a
+pair enters when each of its two effects earns its place beside the other. Pairs are screened
 first by linearised score tests (:mod:`.score_tests`: one effect added to the other's single fit
 on fold A, a Gauss-Newton step scored on fold B) and fitted fully, best screened first, where
-the screening says both may earn. Backward, every chosen effect must earn its place beside the others (each
-drop-one model refitted from several starts), and its size on all data must reach a tenth of its
-smallest realistic size (:meth:`Selector.negligible`); the least needed effect that does not is
-dropped (``pruned``) and the check repeats; a dropped effect leaves the candidates and the forward
-selection resumes. An effect that states its size is checked for it already on entry
+the screening says both may earn. Backward, every chosen effect must earn its place beside the
+others (each drop-one model refitted from several starts), and its size on all data must reach a
+tenth of its smallest realistic size (:meth:`Selector.negligible`); the least needed effect that
+does not is dropped (``pruned``) and the check repeats; a dropped effect leaves the candidates
+and the forward selection resumes. An effect that states its size is checked for it already on entry
 (:meth:`Selector.negligible_on_entry`): negligible on all data, it leaves the candidates before
 any round is fitted beside it.
 """
