@@ -58,11 +58,6 @@ class kernel_budget:
         return False
 
 
-def serial_kernels() -> kernel_budget:
-    """Context: kernel calls made by this thread run on this thread alone."""
-    return kernel_budget(lambda: 1)
-
-
 def run_split(block_fn, n: int, *args) -> None:
     """``block_fn(start, stop, *args)`` over ``0..n-1`` in :func:`kernel_threads` nearly equal
     blocks run in parallel (the compiled block functions release the GIL); the calling thread

@@ -16,7 +16,7 @@ from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
 from benchmark.problems.timedomain.diagnosis.pipeline import base_context, friction_scale
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch
-from benchmark.problems.timedomain.kernel_pool import kernel_threads, serial_kernels
+from benchmark.problems.timedomain.kernel_pool import kernel_budget, kernel_threads
 from tests.conftest import PAPER_MOTOR, compose_config
 
 EFFECTS = load_effects("timedomain")
@@ -92,7 +92,7 @@ def test_kernel_cache_gives_the_kernels_outputs_and_simulates_each_row_once(offs
     assert (cache.requested, cache.simulated) == (5, 4)
     np.testing.assert_array_equal(cache.simulate(batch[[3, 4]]), direct[[3, 4]])  # the last two kept
     assert cache.simulated == 4
-    with serial_kernels():  # one thread or several: the same rows, the same outputs
+    with kernel_budget(lambda: 1):  # one thread or several: the same rows, the same outputs
         one = simulate_extended_batch(batch, data.v_alpha, data.v_beta, data.linear, data.sample_time, 1)
     np.testing.assert_array_equal(one, direct)
 
