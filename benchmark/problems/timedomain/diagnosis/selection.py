@@ -277,7 +277,8 @@ class Selector(Screening):
     def row(self, name: str, cur: SetFit, sf: SetFit, band: float) -> dict:
         """One trial of the forward selection: ``sf`` is ``cur`` plus ``name``."""
         return {"effect": name, "heldout_chi2": sf.chi2, "excess_reduction": share_removed(cur.chi2, sf.chi2),
-                "earns": self.rule.earns(cur.chi2, sf.chi2, band)}
+                "in_sample_reduction": share_removed(cur.in_sample_chi2, sf.in_sample_chi2),
+                "earns": self.rule.earns_fit(cur, sf, band)}
 
     def indistinguishable(self, best: SetFit, others: list[tuple[str, SetFit]], z: float) -> list[str]:
         """Names of ``others`` whose held-out score is within ``z`` standard errors of ``best``'s."""
@@ -341,7 +342,7 @@ class Selector(Screening):
             return {e.name: sf for e, sf in zip(effects, done, strict=True)}
 
         fits = fits_of(first)
-        if not any(self.rule.earns(cur.chi2, sf.chi2, band) for sf in fits.values()):
+        if not any(self.rule.earns_fit(cur, sf, band) for sf in fits.values()):
             fits |= fits_of([e for e in ranked if e.name not in fits])
         return fits, screened
 
@@ -379,7 +380,7 @@ class Selector(Screening):
             sf = self.fit(cur.effects + [a, b], [(singles[a.name], [singles[a.name]]),
                                                  (singles[b.name], [singles[b.name]])], progress=progress)
             sa, sb = singles[a.name].chi2, singles[b.name].chi2
-            earns = self.rule.earns(sb, sf.chi2, band) and self.rule.earns(sa, sf.chi2, band)
+            earns = self.rule.earns_fit(singles[b.name], sf, band) and self.rule.earns_fit(singles[a.name], sf, band)
             rnd["candidates"].append({"effect": r["effect"], "heldout_chi2": sf.chi2,
                                       "excess_reduction": share_removed(cur.chi2, sf.chi2),
                                       "shares_beside_each_other": {a.name: share_removed(sb, sf.chi2),
@@ -423,7 +424,7 @@ class Selector(Screening):
             fits = self.fits([([x for x in cur.effects if x is not e], [(cur, [cur]), (base_fit, [cur])], True)
                               for e in cur.effects], progress)
             withouts = {e.name: w for e, w in zip(cur.effects, fits, strict=True)}
-            failing = [n for n, w in withouts.items() if not self.rule.earns(w.chi2, cur.chi2, band) or n in small]
+            failing = [n for n, w in withouts.items() if not self.rule.earns_fit(w, cur, band) or n in small]
             if not failing:
                 return cur, withouts, pruned
             least = min(failing, key=lambda n: withouts[n].chi2)  # the model does best without it
