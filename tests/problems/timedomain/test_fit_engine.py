@@ -122,32 +122,6 @@ def test_free_coast_is_the_closed_form_of_the_coast():
     assert 0 < stops[1] < stops[0] < len(t) - 1  # both stop inside the record, the fan-loaded one sooner
 
 
-def test_a_fan_loaded_coast_whose_quadratic_has_real_roots_is_the_complex_closed_form():
-    """Where ``q^2 = 4 A C - B^2 < 0`` the tangent turns hyperbolic; ``q^2 = 0``, a double root.
-    Against the complex closed form written out here (``q = i r``), and against the ODE itself
-    (RK4 on a fine grid) where the roots are double."""
-    t = np.linspace(0.0, 30.0, 3001)
-    J, fv = np.array([[0.0064], [0.0064]]), np.array([[2e-3], [4e-4]])
-    A, C = np.array([[0.04], [0.04]]), np.array([[2e-6], [1e-6]])  # 4AC - B^2: -3.7e-6, then 0
-    w = FreeCoast(t, J, fv, A, C).speed(np.array([[300.0], [300.0]]))
-    q = np.sqrt(complex(4 * A[0, 0] * C[0, 0] - fv[0, 0] ** 2))
-    assert q.real == 0.0 and q.imag > 0
-    phi0 = np.arctan((2 * C[0, 0] * 300.0 + fv[0, 0]) / q)
-    ref = _at_rest_from_first_stop(np.real((-fv[0, 0] + q * np.tan(phi0 - q * t / (2 * J[0, 0]))) / (2 * C[0, 0])))
-    np.testing.assert_allclose(w[0], ref, rtol=1e-10, atol=1e-9)
-    f = lambda v: -(A[1, 0] + fv[1, 0] * v + C[1, 0] * v * v) / J[1, 0]  # noqa: E731
-    v, h, ode = 300.0, 1e-3, [300.0]
-    for _ in range(len(t) - 1):
-        for _ in range(10):
-            k1 = f(v); k2 = f(v + 0.5 * h * k1); k3 = f(v + 0.5 * h * k2); k4 = f(v + h * k3)  # noqa: E702
-            v += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        ode.append(v)
-    ode = _at_rest_from_first_stop(np.array(ode))
-    stop = int(np.argmax(w[1] == 0))  # at 19.2 s the closed form lands on 0.0 exactly, RK4 a hair above
-    assert 0 < stop < len(t) - 1 and abs(stop - int(np.argmax(ode == 0))) <= 1
-    np.testing.assert_allclose(w[1][:stop], ode[:stop], rtol=1e-9)
-
-
 def test_fits_side_by_side_equal_the_fits_one_after_the_other(offset_record, monkeypatch):
     data, ctx, fcs = offset_record
     a, b = data.folds()
