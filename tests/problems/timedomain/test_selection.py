@@ -116,11 +116,12 @@ def test_an_effect_earns_its_place_in_sample_too():
     row = next(r for r in rounds[0]["candidates"] if r["effect"] == TEMP.name)
     assert not row["earns"] and abs(row["excess_reduction"] - 0.2297 / 0.4539) < 1e-12
     assert abs(row["in_sample_reduction"] - 0.00518 / 0.05571) < 1e-12
+    # the coupling alone in sample: 186.7, what the run's reported in-sample share of the load (0.9997) gives
     load = {frozenset({TWO.name}): 257.8775, frozenset({TWO.name, LOAD.name}): 1.4539}
-    order = []
-    sel = _Given(load, share=0.3, in_sample={frozenset({TWO.name}): 12.81, frozenset({TWO.name, LOAD.name}): 1.0557})
-    sel.forward([LOAD], _fit(257.8775, [TWO], in_sample=12.81), BAND, order, [])
-    assert order == [LOAD.name]
+    order, rounds = [], []
+    sel = _Given(load, share=0.3, in_sample={frozenset({TWO.name}): 186.7, frozenset({TWO.name, LOAD.name}): 1.05571})
+    sel.forward([LOAD], _fit(257.8775, [TWO], in_sample=186.7), BAND, order, rounds)
+    assert order == [LOAD.name] and abs(rounds[0]["candidates"][0]["in_sample_reduction"] - 0.9997) < 5e-5
 
 
 def test_statuses_follow_the_band():
