@@ -52,6 +52,8 @@ def test_an_offset_removal_is_named_only_where_the_record_has_the_offset(paper_r
                     else (first["heldout_chi2"], first["heldout_chi2_put_back"]))
     assert right < 1.1 and wrong > 1.2, first
     assert first["excess_reduction"] > 0.9 if named else first["excess_reduction"] <= 0.0
+    # and in sample, as every effect must (each fold's fit on its own samples: 1.05 and 0.0 here)
+    assert first["in_sample_reduction"] > 0.9 if named else first["in_sample_reduction"] <= 0.0
     # the models stay fitted to the conditioned record: a removal of an offset the record does not
     # have leaves its bias there, and no candidate (none given) takes it: a gap, named by nothing
     assert doc["status"] == ("no_gap" if named else "unexplained")

@@ -9,7 +9,8 @@ peaks. So the diagnosis names a removal only when it earns its place by the same
 effect: the final model (base plus the chosen effects) is refitted on the record with the
 removal put back (:func:`~benchmark.problems.timedomain.conditioning.restored`), and the removal
 earns its place when that model is above the noise band and the removal takes at least the
-rule's share of the excess it leaves. One that does not is not named; the models stay fitted to
+rule's share of the excess it leaves, held out and in sample (:meth:`.rule.Rule.earns_fit`, as
+for every effect). One that does not is not named; the models stay fitted to
 the conditioned record, as the identification's are (putting a real removal back where a large
 gap is left, on a bench record with offsets and saturating probes, made the final model worse:
 its stator resistance four times the identification's). Where the selection chose the effect of
@@ -60,10 +61,11 @@ def check_removals(ds: StartupDataset, sel: Selector, final: SetFit, band: float
         key = (name, frozenset(final.names))
         if key not in cache:
             cache[key] = selector_for(restored(ds, name), sel)
-        without = cache[key].fit(final.effects, [(final, [final])]).chi2  # kept in its memo
-        rows.append({"effect": name, "effects_beside": list(final.names), "heldout_chi2_put_back": without,
-                     "heldout_chi2": final.chi2, "excess_reduction": share_removed(without, final.chi2),
-                     "earns": sel.rule.earns(without, final.chi2, band)})
+        without = cache[key].fit(final.effects, [(final, [final])])  # kept in its memo
+        rows.append({"effect": name, "effects_beside": list(final.names), "heldout_chi2_put_back": without.chi2,
+                     "heldout_chi2": final.chi2, "excess_reduction": share_removed(without.chi2, final.chi2),
+                     "in_sample_reduction": share_removed(without.in_sample_chi2, final.in_sample_chi2),
+                     "earns": sel.rule.earns_fit(without, final, band)})
     return rows
 
 

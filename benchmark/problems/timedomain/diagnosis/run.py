@@ -205,19 +205,22 @@ def render_markdown(doc: dict) -> str:
                       "| pair | predicted held-out chi^2 (fold B) | may earn |", "|---|---|---|"]
             lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} | {'yes' if r['may_earn'] else 'no'} |"
                       for r in rnd["screening"][:8]]
-            lines += ["", "| pair | held-out chi^2 | shares beside each other | earns |", "|---|---|---|---|"]
+            lines += ["", "| pair | held-out chi^2 | shares beside each other (held out / in sample) | earns |",
+                      "|---|---|---|---|"]
             lines += [f"| {r['effect']} | {r['heldout_chi2']:.3f} | "
-                      + ", ".join(f"{k} {100 * v:.0f} %" for k, v in r["shares_beside_each_other"].items())
+                      + ", ".join(f"{k} {100 * v:.0f} / {100 * r['in_sample_shares_beside_each_other'][k]:.0f} %"
+                                  for k, v in r["shares_beside_each_other"].items())
                       + f" | {'yes' if r['earns'] else 'no'} |" for r in rnd["candidates"]]
             continue
         lines += ["", f"## Selection round {rnd['round']} (from {start}, held-out chi^2 "
                       f"{rnd['heldout_chi2_from']:.3f})", "",
-                  "| candidate | held-out chi^2 | share of the excess removed | earns |", "|---|---|---|---|"]
+                  "| candidate | held-out chi^2 | share of the excess removed (held out) | in sample | earns |",
+                  "|---|---|---|---|---|"]
         for r in rnd["candidates"]:
             lines.append(f"| {r['effect']} | {r['heldout_chi2']:.3f} | {100 * r['excess_reduction']:.1f} % "
-                         f"| {'yes' if r['earns'] else 'no'} |")
-        lines += [f"| {r['effect']} | screened {r['screened_heldout_chi2']:.3f} | | not fitted (its screening removes "
-                  "less than the share; another earns) |" for r in rnd.get("screening", []) if not r["fitted"]]
+                         f"| {100 * r['in_sample_reduction']:.1f} % | {'yes' if r['earns'] else 'no'} |")
+        lines += [f"| {r['effect']} | screened {r['screened_heldout_chi2']:.3f} | | | not fitted (its screening "
+                  "removes less than the share; another earns) |" for r in rnd.get("screening", []) if not r["fitted"]]
         if rnd.get("negligible"):
             lines += ["", f"`{rnd['negligible']}` earns its place, but fitted on all data its size is negligible "
                           "(below a tenth of the smallest realistic one): out of the candidates."]
