@@ -187,6 +187,11 @@ def test_readme_example_names_double_cage(out):
                if line.startswith("| double_cage |"))
     assert f"dc_tau = {tau['value']:.4g} s +- {tau['standard_error']:.2g} s," in row
     assert f"dc_rise = {par['dc_rise']['value']:.4g} p.u. of low-slip R_R +- " in row
+    # the round's table shows the two shares the rule requires: held out and in sample
+    first = saved["selection"][0]["candidates"][0]
+    assert first["effect"] == "double_cage" and first["in_sample_reduction"] > 0.9
+    assert (f"| double_cage | {first['heldout_chi2']:.3f} | {100 * first['excess_reduction']:.1f} % | "
+            f"{100 * first['in_sample_reduction']:.1f} % | yes |") in (out / "dc" / "diagnosis.md").read_text()
     assert "coulomb_friction" in {e["effect"] for e in doc["excluded"]}
 
 

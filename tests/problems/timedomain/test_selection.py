@@ -152,6 +152,8 @@ def test_two_effects_that_mask_each_other_enter_together_the_stronger_alone_firs
     beside = row["shares_beside_each_other"]  # each removes most of what the other leaves alone
     assert row["earns"] and abs(beside["load_torque"] - 740.0 / 879.0) < 1e-12
     assert abs(beside["speed_sensor_gain"] - 830.0 / 969.0) < 1e-12
+    # in sample the same shares here (each set's in-sample chi^2 given equal to its held-out one)
+    assert row["in_sample_shares_beside_each_other"] == beside and row["in_sample_reduction"] == row["excess_reduction"]
     # the third round: the channel skew removes 1/139 of what is left
     assert rounds[2]["candidates"][0]["effect"] == "channel_delay" and not rounds[2]["candidates"][0]["earns"]
 
