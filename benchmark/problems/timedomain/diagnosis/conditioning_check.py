@@ -9,8 +9,8 @@ peaks. So the diagnosis names a removal only when it earns its place by the same
 effect: the final model (base plus the chosen effects) is refitted on the record with the
 removal put back (:func:`~benchmark.problems.timedomain.conditioning.restored`), and the removal
 earns its place when that model is above the noise band and the removal takes at least the
-rule's share of the excess it leaves, held out and in sample (:meth:`.rule.Rule.earns_fit`, as
-for every effect). One that does not is not named; the models stay fitted to
+rule's share of the excess it leaves (:meth:`.rule.Rule.earns_fit`, as for every effect; the
+in-sample share is reported beside it). One that does not is not named; the models stay fitted to
 the conditioned record, as the identification's are (putting a real removal back where a large
 gap is left, on a bench record with offsets and saturating probes, made the final model worse:
 its stator resistance four times the identification's). Where the selection chose the effect of

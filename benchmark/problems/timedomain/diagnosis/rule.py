@@ -16,16 +16,17 @@ of the excess that the model without it leaves:
 
     D(e | M) = (S(M - e) - S(M)) / (S(M - e) - 1) >= tau.
 
-**In sample too.** Each fold's fit on its own samples must show the same: ``e`` removes at least
-``tau`` of the excess in-sample chi^2 (each fold's fit scored on its own samples, pooled) of the
-model without it. A nested model fitted to convergence reaches in-sample at least what the
-smaller one does, and an effect that is there gains in sample at least what it gains held out;
-where it gains held out and not in sample, the smaller model's fold fit ended in a poorer basin
-that predicts the other fold worse, and any flexible effect whose fit lands elsewhere "earns"
-(motulator perf record ``2k2_dol_coupling_load``: the coupling and load's fold A fit ended 290
-above its best basin after a change of the coast's last bits, and a heating of 0.15 K, then
-sensor offsets of 0.03 V, removed half the held-out excess and 9 % (12 %) of the in-sample one). The
-same share ``tau``, no new constant.
+**In sample: reported, not decided.** Each round also reports the share of the in-sample excess
+(each fold's fit scored on its own samples, pooled) an effect removes. It does not decide: an
+effect that is there need not gain in sample what it gains held out. Where the base misses, each
+fold's fit bends its parameters toward its own samples, so the in-sample excess is much smaller
+than the held-out one, and a real effect removes mostly the folds' disagreement (the worked
+example's bench record, ``docs/worked_example.md``: a flexible coupling removes 53 % of the
+held-out excess, 30953 -> 14532, and 20 % of the in-sample one, 12415 -> 9969; with an in-sample
+test at ``tau`` the record went ``unexplained``). The case that test was made for (a heating
+removing 51 % held out and 9 % in sample beside a coupling-and-load fit left in a poorer basin,
+after a change of the free coast's last bits that main does not have) is a fit's basin, not the
+rule's to judge.
 
 The same test decides everything:
 
@@ -74,12 +75,9 @@ class Rule:
         return bool(without > band**2 and share_removed(without, with_) >= self.share)
 
     def earns_fit(self, without, with_, band: float) -> bool:
-        """Whether an effect earns its place between two fitted sets (``chi2`` held out and
-        ``in_sample_chi2``, :class:`.set_fit.SetFit`): ``without`` the model without it,
-        ``with_`` the model with it; :meth:`earns` held out, and the same share of the in-sample
-        excess (module docstring)."""
-        return (self.earns(without.chi2, with_.chi2, band)
-                and share_removed(without.in_sample_chi2, with_.in_sample_chi2) >= self.share)
+        """:meth:`earns` between two fitted sets (their held-out ``chi2``, :class:`.set_fit.SetFit`):
+        ``without`` the model without the effect, ``with_`` the model with it."""
+        return self.earns(without.chi2, with_.chi2, band)
 
 
 def effective_count(d: np.ndarray, groups: list[np.ndarray]) -> float:

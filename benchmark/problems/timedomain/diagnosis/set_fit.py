@@ -28,7 +28,7 @@ class SetFit:
             self.held[masks[other]] = r[masks[other]]
             self.ssr_fold[f] = float(np.sum(r[masks[f]] ** 2))
         self.chi2 = float(np.mean(self.held[self.used] ** 2))
-        #: What the fits reached on their own samples, per residual (the rule's in-sample check)
+        #: What the fits reached on their own samples, per residual (reported beside the held-out score)
         self.in_sample_chi2 = float(sum(self.ssr_fold.values()) / max(int(np.count_nonzero(self.used)), 1))
 
     @property
