@@ -27,9 +27,10 @@ set but under-rates is not fitted where another earns: there the screening decid
 enters). Where none of them earns, every candidate is fitted fully; when none earns then, a
 pair enters when each of its two effects earns its place beside the other. Pairs are screened
 first by linearised score tests (:mod:`.score_tests`: one effect added to the other's single fit
-on fold A, a Gauss-Newton step scored on fold B) and fitted fully, best screened first, where
-the screening says both may earn. Backward, every chosen effect must earn its place beside the
-others (each drop-one model refitted from several starts), and its size on all data must reach a
+on fold A, a Gauss-Newton step scored on fold B); as for the singles, the best screened and every
+one the screening says both may earn are fitted fully, best screened first. Backward, every
+chosen effect must earn its place beside the others (each drop-one model refitted from several
+starts), and its size on all data must reach a
 tenth of its smallest realistic size (:meth:`Selector.negligible`); the least needed effect that
 does not is dropped (``pruned``) and the check repeats; a dropped effect leaves the candidates
 and the forward selection resumes. An effect that states its size is checked for it already on entry
@@ -374,7 +375,7 @@ class Selector(Screening):
                "heldout_chi2_from": cur.chi2, "candidates": [], "chosen": None, "indistinguishable": []}
         rounds.append(rnd)
         for r in screened:
-            if not r["may_earn"]:
+            if not r["may_earn"] and r is not screened[0]:  # the best screened is fitted whatever
                 continue
             a, b = r["pair"]
             sf = self.fit(cur.effects + [a, b], [(singles[a.name], [singles[a.name]]),
