@@ -200,8 +200,8 @@ def render_markdown(doc: dict) -> str:
     for rnd in doc["selection"]:
         start = f"base{''.join(' + ' + e for e in rnd['from'])}"
         if rnd.get("pairs"):
-            lines += ["", f"## Pairs from {start} (no single candidate earns its place; each pair's fold-B "
-                          "held-out chi^2 predicted by a score test, those that may earn fitted fully)", "",
+            lines += ["", f"## Pairs from {start} (no single candidate earns its place; each pair's fold-B held-out "
+                          "chi^2 predicted by a score test; the best and those that may earn fitted fully)", "",
                       "| pair | predicted held-out chi^2 (fold B) | may earn |", "|---|---|---|"]
             lines += [f"| {r['effect']} | {r['heldout_chi2_fold_B']:.3f} | {'yes' if r['may_earn'] else 'no'} |"
                       for r in rnd["screening"][:8]]
