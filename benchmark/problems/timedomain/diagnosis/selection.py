@@ -381,17 +381,14 @@ class Selector(Screening):
             sf = self.fit(cur.effects + [a, b], [(singles[a.name], [singles[a.name]]),
                                                  (singles[b.name], [singles[b.name]])], progress=progress)
             sa, sb = singles[a.name].chi2, singles[b.name].chi2
-            earns = self.rule.earns_fit(singles[b.name], sf, band) and self.rule.earns_fit(singles[a.name], sf, band)
-            ia, ib = singles[a.name].in_sample_chi2, singles[b.name].in_sample_chi2
-            rnd["candidates"].append({"effect": r["effect"], "heldout_chi2": sf.chi2,
-                                      "excess_reduction": share_removed(cur.chi2, sf.chi2),
-                                      "in_sample_reduction": share_removed(cur.in_sample_chi2, sf.in_sample_chi2),
-                                      "shares_beside_each_other": {a.name: share_removed(sb, sf.chi2),
-                                                                   b.name: share_removed(sa, sf.chi2)},
-                                      "in_sample_shares_beside_each_other": {
-                                          a.name: share_removed(ib, sf.in_sample_chi2),
-                                          b.name: share_removed(ia, sf.in_sample_chi2)},
-                                      "earns": earns})
+            without = {a.name: singles[b.name], b.name: singles[a.name]}  # each effect's model without it
+            row = self.row(r["effect"], cur, sf, band)  # the pair's shares against the current set
+            row |= {"shares_beside_each_other": {n: share_removed(w.chi2, sf.chi2) for n, w in without.items()},
+                    "in_sample_shares_beside_each_other": {n: share_removed(w.in_sample_chi2, sf.in_sample_chi2)
+                                                           for n, w in without.items()},
+                    "earns": all(self.rule.earns_fit(w, sf, band) for w in without.values())}
+            rnd["candidates"].append(row)
+            earns = row["earns"]
             if earns:
                 names = [a.name, b.name] if sa <= sb else [b.name, a.name]  # the stronger alone first
                 rnd["chosen"] = "+".join(names)
