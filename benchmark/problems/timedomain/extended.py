@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from benchmark.problems.timedomain.compiled import compiled
 from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the row API lives there)
     EXTENDED_FIELDS,
     IDX,
@@ -40,14 +40,14 @@ N_WORK = N_STATES + 2
 SQRT3_2 = math.sqrt(3.0) / 2.0
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _sat(x, k, ref, ex):
     if k == 0.0:
         return 1.0
     return 1.0 + k * (x / ref) ** ex
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _leak_gain(c, dmag):
     """Stator current over (leakage flux / L_sigma): 1 unless the leakage saturates."""
     sat = _sat(dmag, c[10], c[11], c[12])
@@ -57,7 +57,7 @@ def _leak_gain(c, dmag):
     return sat
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _drop_sign(i, i0):
     if i0 > 0.0:
         return math.tanh(i / i0)
@@ -68,7 +68,7 @@ def _drop_sign(i, i0):
     return 0.0
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _loads(c, t, w_mech):
     """(passive Coulomb-like load torque, speed-dependent load torque) at time t, N m."""
     t_pass = c[25]
@@ -85,7 +85,7 @@ def _loads(c, t, w_mech):
     return t_pass, t_dyn
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _switched(t, t_on, t_rise, tau, t_off):
     """Envelope (0-1) of the switched load at time t: on at ``t_on`` over a first-order rise of
     time constant ``tau`` (an armature circuit), off again at ``t_off`` (when after ``t_on``)
@@ -102,7 +102,7 @@ def _switched(t, t_on, t_rise, tau, t_off):
     return 1.0 - math.exp(-(t - t_on) / tau)
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _coupling_torque(twist, slip_speed, k, c, half_play, k_cubic):
     """Torque (N m) through a coupling of stiffness ``k`` (N m/rad) and damping ``c`` (N m s/rad)
     twisted by ``twist`` (rad) at ``slip_speed`` (rad/s), with free play of half-width
@@ -125,7 +125,7 @@ def _coupling_torque(twist, slip_speed, k, c, half_play, k_cubic):
     return k * z + c * slip_speed
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _resist(direction, drive, tc):
     """Coulomb torque: against the motion, or at standstill the drive clipped to +-tc."""
     if direction != 0.0:
@@ -137,7 +137,7 @@ def _resist(direction, drive, tc):
     return drive
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
     """Current (A) of a rotor loop of resistance ``R`` (ohm; 0: absent, no current) and leakage
     ``L`` (H) whose flux linkage (Wb) is ``p`` over the magnetising node's ``pm``; ``gain``
@@ -147,7 +147,7 @@ def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
     return 0.0, 0.0
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
     """d psi / dt (V) of a rotor loop (resistance ``R`` ohm, 0: absent; ``R_t`` at its
     temperature) carrying ``i`` (A) at the electrical rotor speed ``w`` (rad/s)."""
@@ -156,7 +156,7 @@ def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
     return 0.0, 0.0
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
     gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
@@ -264,7 +264,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
     return t_m
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _stator_current(c, x, tm):
     if _t_mode(c):
         ia, ib, _, _, _ = _t_solve(c, x, tm)
@@ -275,7 +275,7 @@ def _stator_current(c, x, tm):
     return d_a * g, d_b * g
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _terminal_current(c, x, v_a, v_b, tm):
     """Recorded stator current: the branch current plus the stator-side iron-loss current."""
     ia, ib = _stator_current(c, x, tm)
@@ -296,12 +296,12 @@ def _terminal_current(c, x, v_a, v_b, tm):
     return ia + k * (v_a - rs * ia), ib + k * (v_b - rs * ib)
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _sign(v):
     return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _stick(c, x, w0, wl0, t, tm):
     """After a step: a speed that crossed zero against its Coulomb torque sticks at zero."""
     p = c[20]
@@ -329,7 +329,7 @@ def _stick(c, x, w0, wl0, t, tm):
             x[6] = 0.0
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
     """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s) (the load side's on a
     two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps).
@@ -402,7 +402,7 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
         x0[s] = x[s]
 
 
-@numba.njit(cache=True, nogil=True)
+@compiled(nogil=True)
 def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
     """Rows ``start..stop-1`` of ``rows`` into ``out`` (left NaN for invalid rows); releases the GIL."""
     work = np.empty((7, N_WORK))
@@ -426,7 +426,7 @@ def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
     return out
 
 
-@numba.njit(cache=True)
+@compiled()
 def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
     """One trajectory from state ``x0`` (modified in place to the final state) starting at time
     ``t0`` (s): (3, N)."""

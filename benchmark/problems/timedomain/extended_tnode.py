@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import math
 
-import numba
+from benchmark.problems.timedomain.compiled import compiled
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@compiled(_nrt=False, inline="always")
 def _t_mode(c):
     """The row's magnetising branch saturates at a T circuit's node: a split is set, the
     magnetising curve bends, and the leakage does not saturate (see the module docstring)."""
     return c[36] > 0.0 and (c[7] != 0.0 or c[23] != 0.0) and c[10] == 0.0
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _t_constants(c, tm, warm):
     """The T circuit of a T-mode row into ``tm``: ``Lm, Lls, Llr`` (H), the referral ``g0``,
     ``c0 = 1/Lls + 1/Llr`` and ``c0 + 1/Lm`` (1/H); ``tm[6]`` 1 when the node's flux may start
@@ -37,7 +37,7 @@ def _t_constants(c, tm, warm):
     tm[5], tm[6], tm[7] = tm[4] + 1.0 / Lm, 1.0 if warm else 0.0, 0.0
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _t_node_flux_warm(ms_k, ms_psi, ms_exp, k2, e2, Lm, c0, A, m, tm):
     """The T node's flux magnitude (Wb) by Newton near the root: the first step from the last
     evaluation of the trajectory (``tm[7]`` flux, ``tm[9]`` curve factor, ``tm[10]`` its
@@ -71,7 +71,7 @@ def _t_node_flux_warm(ms_k, ms_psi, ms_exp, k2, e2, Lm, c0, A, m, tm):
     return m
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def _t_solve(c, x, tm):
     """T mode: stator and total rotor currents (T units, A) and the referral ``Lm/(Lm + Llr)``
     (the circuit's constants in ``tm``, :func:`_t_constants`). The node's flux solves its

@@ -15,8 +15,9 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
-import numba
 import numpy as np
+
+from benchmark.problems.timedomain.compiled import compiled
 
 #: Order of the physical parameters everywhere a vector of them is used.
 PARAMETER_NAMES = ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")
@@ -127,13 +128,13 @@ def coefficients(theta: np.ndarray, p: int) -> np.ndarray:
     return np.ascontiguousarray(out)
 
 
-@numba.njit(cache=True, inline="always")
+@compiled(inline="always")
 def electromagnetic_torque(kt, i_a, i_b, psi_a, psi_b):
     """Air-gap torque, N m: ``(3/2) p (Lm/Lr) (psi_a i_b - psi_b i_a)`` (``kt`` holds the factor)."""
     return kt * (psi_a * i_b - psi_b * i_a)
 
 
-@numba.njit(cache=True, inline="always")
+@compiled(inline="always")
 def state_derivative(c, i_a, i_b, psi_a, psi_b, w, v_a, v_b, direction):
     """Time derivatives of the five states for coefficient row ``c``; load torque is zero.
 

@@ -39,6 +39,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from benchmark.problems.timedomain.compiled import compiled
 from benchmark.problems.timedomain.kernel_pool import shared_executor
 from benchmark.problems.timedomain.motor import N_COEF
 
@@ -59,7 +60,7 @@ _ALIVE_CHECK = 64
 
 
 # -- the step: one candidate (the plant of simulate_states) and branch-free lanes of a chunk ---------
-@numba.njit(cache=True)
+@compiled()
 def _stage_voltages(v_a, v_b, k, linear):
     va0, vb0 = v_a[k], v_b[k]
     if linear:
@@ -68,7 +69,7 @@ def _stage_voltages(v_a, v_b, k, linear):
     return va0, vb0, va0, vb0, va0, vb0
 
 
-@numba.njit(cache=True)
+@compiled()
 def _derivative_lane(a11, a13, c1, c2, a31, a33, kt, inv_tau, b_m, fc,
                      i_a, i_b, psi_a, psi_b, w, v_a, v_b, d):
     """:func:`benchmark.problems.timedomain.motor.state_derivative` with the friction cases as selects.
@@ -87,7 +88,7 @@ def _derivative_lane(a11, a13, c1, c2, a31, a33, kt, inv_tau, b_m, fc,
     return di_a, di_b, dpsi_a, dpsi_b, dw
 
 
-@numba.njit(cache=True)
+@compiled()
 def _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, h):
     """One RK4 step of one candidate (coefficient row ``c``): the reference plant's step.
 
@@ -119,7 +120,7 @@ def _rk4(c, i_a, i_b, psi_a, psi_b, w, va0, vb0, vam, vbm, va1, vb1, h):
     return n_ia, n_ib, n_pa, n_pb, n_w
 
 
-@numba.njit(cache=True)
+@compiled()
 def _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h):
     """One RK4 step of lanes ``0..nl-1`` of work buffer ``W`` (see the module docstring);
     operation for operation the same as :func:`_rk4`. Sets the lane's divergence flag."""
@@ -170,7 +171,7 @@ def _rk4_lanes(W, nl, va0, vb0, vam, vbm, va1, vb1, h):
         W[_R_BAD * L + j] = W[_R_BAD * L + j] if ok else 1.0
 
 
-@numba.njit(cache=True)
+@compiled()
 def _all_diverged(W, nl):
     for j in range(nl):
         if W[_R_BAD * LANES + j] == 0.0:
@@ -178,7 +179,7 @@ def _all_diverged(W, nl):
     return True
 
 
-@numba.njit(cache=True)
+@compiled()
 def _load_chunk(W, coef_t, start, nl):
     """Fill work buffer ``W`` with columns ``start..start+nl-1`` of the transposed coefficients
     ``coef_t`` (N_COEF, n); states, cost and flags zero."""
@@ -189,7 +190,7 @@ def _load_chunk(W, coef_t, start, nl):
             W[r * LANES + j] = coef_t[r, start + j]
 
 
-@numba.njit(cache=True)
+@compiled()
 def _advance(W, nl, v_a, v_b, k, linear, h):
     """One RK4 step of the lanes of ``W`` from sample ``k`` to ``k+1`` (shared by the cost and
     the output kernels); True when every lane has diverged (checked every :data:`_ALIVE_CHECK`
@@ -199,7 +200,7 @@ def _advance(W, nl, v_a, v_b, k, linear, h):
     return k % _ALIVE_CHECK == _ALIVE_CHECK - 1 and _all_diverged(W, nl)
 
 
-@numba.njit(cache=True)
+@compiled()
 def _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, current_used, inv_p, ka, kb, kw,
                 exponent):
     """Run the eq. 13-15 cost of the ``nl`` lanes of ``W`` over the whole record.
@@ -236,7 +237,7 @@ def _chunk_cost(W, nl, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas, curr
             break
 
 
-@numba.njit(cache=True, nogil=True)
+@compiled(nogil=True)
 def _cost_block(start, stop, W, coef_t, lanes, res, v_a, v_b, linear, h, i_a_meas, i_b_meas, speed_meas,
                 current_used, inv_p, ka, kb, kw, exponent):
     """Costs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``res[start:stop]``,
@@ -253,7 +254,7 @@ def _cost_block(start, stop, W, coef_t, lanes, res, v_a, v_b, linear, h, i_a_mea
         s += nl
 
 
-@numba.njit(cache=True)
+@compiled()
 def _chunk_outputs(W, nl, rows, start, n_real, out, v_a, v_b, linear, h, inv_p):
     """Write i_a, i_b and mechanical speed of the lanes of ``W`` into ``out`` (rows
     ``rows[start + j]``; padding lanes past ``n_real`` are not written) until each diverges."""
@@ -273,7 +274,7 @@ def _chunk_outputs(W, nl, rows, start, n_real, out, v_a, v_b, linear, h, inv_p):
             break
 
 
-@numba.njit(cache=True, nogil=True)
+@compiled(nogil=True)
 def _outputs_block(start, stop, W, coef_t, lanes, rows, n_real, out, v_a, v_b, linear, h, inv_p):
     """Outputs of the candidates in columns ``start..stop-1`` of ``coef_t`` into ``out[rows[.]]``."""
     s = start
@@ -395,7 +396,7 @@ def startup_outputs_batch(coef, v_a, v_b, linear, h, p):
     return _outputs_batch(coef, v_a, v_b, linear, h, p, LANES, numba.get_num_threads())
 
 
-@numba.njit(cache=True, _nrt=False)
+@compiled(_nrt=False)
 def substep_voltages(v_a, v_b, k, linear, j, substeps):
     """Input of sub-step ``j`` of ``substeps`` in the sample interval ``k``: its start fraction
     ``f0`` and the voltages at its start, midpoint and end (held, or interpolated linearly
@@ -411,7 +412,7 @@ def substep_voltages(v_a, v_b, k, linear, j, substeps):
             vb0 + f1 * dvb)
 
 
-@numba.njit(cache=True)
+@compiled()
 def simulate_states(c, v_a, v_b, linear, h, substeps, x0):
     """One trajectory with ``substeps`` RK4 steps per sample (the reference plant).
 
