@@ -2,7 +2,8 @@
 
 The independent plant's held-out blind draw (seed 414, set 24: a 7.5 kW direct start) ended the
 whole blind run with ``ZeroDivisionError`` raised inside the extended model's kernel, during the
-pair step's score tests (a linear step from a single fit sets one of the rows' divisors to 0).
+pair step's score tests (a linear step from a single fit; which divisor it put at 0 was not traced,
+so every divisor of the kernel is tested here).
 The kernels are compiled with NumPy's error model (:mod:`benchmark.problems.timedomain.compiled`):
 such a row's outputs are inf or NaN, and the fits count them as diverged."""
 
