@@ -113,6 +113,7 @@ def own_source(settings: BlindSettings):
 def plant_source(settings: BlindSettings):
     """(draws, make) of the independent plant: its own motors, scenarios, sizes, forms, noise."""
     from synthetic.independent import EFFECTS, draw_blind_set, make_dataset, write_dataset
+    from synthetic.independent.dataset import scenario_with_duration
 
     ours = set(load_effects("timedomain"))
     allowed = sorted(e for e in EFFECTS if e in ours and e not in settings.in_base and settings.may_inject(e))
@@ -130,7 +131,7 @@ def plant_source(settings: BlindSettings):
                 kind = str(rng.choice(["six_step", "pwm"]))
         spec = draw_blind_set(rng, effects=chosen, scenario=kind, forms=settings.forms)
         if settings.plant_duration:  # default: the plant's own draw (0.8-1.5 s: big motors need it)
-            spec["scenario"]["duration"] = settings.plant_duration
+            spec["scenario"] = scenario_with_duration(spec["scenario"], settings.plant_duration, spec["sample_rate"])
         if not settings.plant_stop:
             spec["stop"] = None
         d = {"index": i, "effects": chosen, "spec": spec, "scenario": kind, "motor": spec["motor"]}

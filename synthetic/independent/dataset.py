@@ -66,8 +66,8 @@ def draw_scenario(kind: str, motor: Motor, duration: float, sample_rate: float,
     drawn (grid harmonics, unbalance, pole scatter and bounce, dip; PWM ramp), else ideal."""
     f = motor.frequency
     if kind == "six_step":
-        Nc = max(1, int(round(sample_rate / (6 * f))))
-        return {"kind": kind, "Ed": motor.Ed, "Nc": Nc, "cycles": max(1, int(round(duration * sample_rate / (6 * Nc))))}
+        sc = {"kind": kind, "Ed": motor.Ed, "Nc": max(1, int(round(sample_rate / (6 * f))))}
+        return scenario_with_duration(sc, duration, sample_rate)
     if kind == "pwm":
         sc = {"kind": kind, "Ed": round(1.35 * motor.voltage, 1), "f": f, "V_rated": motor.voltage, "f_rated": f,
               "ramp": 0.3 * duration, "boost": 0.03, "duration": duration}
@@ -86,6 +86,14 @@ def draw_scenario(kind: str, motor: Motor, duration: float, sample_rate: float,
                   bounce=[float(x) for x in rng.uniform(0.2e-3, 1.0e-3, 3)], arc_voltage=float(rng.uniform(20, 40)),
                   dip=float(rng.uniform(0.01, 0.05)), x_over_r=float(rng.uniform(2, 6)))
     return sc
+
+
+def scenario_with_duration(sc: dict, duration: float, sample_rate: float) -> dict:
+    """Scenario ``sc`` recording ``duration`` s at ``sample_rate`` Hz: a six-step start states
+    it as whole cycles of its ``Nc`` samples per state, the others as ``duration``."""
+    if sc["kind"] == "six_step":
+        return sc | {"cycles": max(1, int(round(duration * sample_rate / (6 * sc["Nc"]))))}
+    return sc | {"duration": float(duration)}
 
 
 def make_spec(motor: str, scenario: str = "six_step", effects=(), seed: int = 0, duration: float = 1.0,

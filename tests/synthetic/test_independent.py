@@ -312,3 +312,21 @@ def test_blind_draw_is_reproducible_and_valid():
     ds = make_dataset(spec)
     assert {e["name"] for e in ds.truth["effects"]} == {"sensor_offset", "load_torque"}
     assert ds.truth["source"] == "independent"
+
+
+def test_a_scenario_given_a_duration_records_that_long_whatever_its_kind():
+    """The blind runner's ``plant_duration`` sets a drawn scenario's length: a six-step start
+    states it as whole cycles (it has no ``duration``; setting one made the plant raise), the grid
+    and PWM starts as ``duration``; the six-step's own draw uses the same count."""
+    from synthetic.independent.dataset import build_scenario, draw_scenario, scenario_with_duration
+    from synthetic.independent.motors import get_motor
+
+    mo = get_motor("paper_1kw")
+    fs = 12000.0
+    for kind in ("six_step", "dol", "pwm"):
+        sc = scenario_with_duration(draw_scenario(kind, mo, 1.0, fs, None), 0.25, fs)
+        made = build_scenario(sc)
+        samples = made.samples() if kind == "six_step" else int(round(made.duration * fs))
+        assert abs(samples / fs - 0.25) <= 6 * sc.get("Nc", 1) / fs, kind
+    assert draw_scenario("six_step", mo, 0.25, fs, None) == scenario_with_duration(
+        draw_scenario("six_step", mo, 1.0, fs, None), 0.25, fs)
