@@ -281,9 +281,9 @@ def diagnose_folder(settings: BlindSettings, folder: Path, outdir: Path) -> dict
     return run_diagnosis(diagnosis_config(settings, folder), outdir)
 
 
-def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dict:
-    """Make set ``d`` into ``work/sets/set_NNN`` (``make(d, folder)``), move its ``truth.yaml``
-    to ``work/truth`` (if it has one), then diagnose the folder; the diagnosis document."""
+def make_set(d: dict, make, work: Path) -> Path:
+    """Make set ``d`` into ``work/sets/set_NNN`` (``make(d, folder)``) and move its ``truth.yaml``
+    to ``work/truth`` (if it has one); the data folder."""
     name = f"set_{d['index']:03d}"
     folder = work / "sets" / name
     if folder.exists():
@@ -293,7 +293,45 @@ def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dic
     (work / "truth").mkdir(parents=True, exist_ok=True)
     if (folder / "truth.yaml").exists():
         (folder / "truth.yaml").replace(work / "truth" / f"{name}.yaml")
-    return diagnose_folder(settings, folder, work / "diagnoses" / name)
+    return folder
+
+
+def make_and_diagnose(settings: BlindSettings, d: dict, make, work: Path) -> dict:
+    """Make set ``d`` (:func:`make_set`), then diagnose its folder; the diagnosis document."""
+    folder = make_set(d, make, work)
+    return diagnose_folder(settings, folder, work / "diagnoses" / folder.name)
+
+
+def failed_row(index: int, effects: list, stage: str, error: BaseException) -> dict:
+    """The row of a set whose making (``stage`` ``make``) or diagnosis (``diagnose``) raised
+    ``error``: kept with its message so that the draw goes on. A diagnosis that raised is a
+    miss of every score it enters (its verdict names nothing, ``predicted`` is ``error``); a
+    set the source could not make is left out of the scores and listed
+    (:func:`~benchmark.analysis.blind_report.summarise`)."""
+    label = label_of(effects)
+    return {"index": index, "truth": label, "truth_effects": list(effects), "injected": label,
+            "left_out_effects": [], "predicted": "error", "status": "error",
+            "verdict": f"{stage} raised {type(error).__name__}: {error}", "error_stage": stage,
+            "effects": [], "conditioned": [], "held_by_base": [], "explained_share": math.nan,
+            "gap_before": math.nan, "gap_after": math.nan, "invisible": False}
+
+
+def make_and_diagnose_or_fail(settings: BlindSettings, d: dict, make, work: Path) -> dict:
+    """The scored row of set ``d``: :func:`make_and_diagnose`, or :func:`failed_row` when the
+    making or the diagnosis raised (its traceback in ``work/diagnoses/set_NNN/error.txt``)."""
+    import traceback
+
+    stage, outdir = "make", work / "diagnoses" / f"set_{d['index']:03d}"
+    try:
+        folder = make_set(d, make, work)
+        stage = "diagnose"
+        doc = diagnose_folder(settings, folder, outdir)
+    except Exception as error:  # noqa: BLE001  (any failure of one set is that set's row)
+        outdir.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(outdir / "error.txt", traceback.format_exc())
+        return failed_row(d["index"], d["effects"], stage, error) | {"wall_time_s": math.nan}
+    return score_row(d["index"], d["effects"], doc) | {"indistinguishable": doc.get("indistinguishable", []),
+                                                        "wall_time_s": float(doc.get("wall_time_s", math.nan))}
 
 
 def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
@@ -353,7 +391,10 @@ def run_source(settings: BlindSettings, command: str) -> dict:
     if results_file.exists() and settings.resume:
         for line in results_file.read_text().splitlines():
             r = json.loads(line)
-            done[r["index"]] = r
+            if r.get("status") == "error":  # a set that raised is made and diagnosed again
+                done.pop(r["index"], None)
+            else:
+                done[r["index"]] = r
     work.mkdir(parents=True, exist_ok=True)
     if settings.report_only:  # score the sets diagnosed so far (an interrupted run)
         draws = [d for d in draws if d["index"] in done]
@@ -364,14 +405,11 @@ def run_source(settings: BlindSettings, command: str) -> dict:
             if doc_file.exists():
                 row = row | score_row(d["index"], d["effects"], json.loads(doc_file.read_text()))
         else:
-            doc = make_and_diagnose(settings, d, make, work)
-            row = score_row(d["index"], d["effects"], doc)
-            row |= {"indistinguishable": doc.get("indistinguishable", []),
-                    "wall_time_s": float(doc.get("wall_time_s", math.nan)),
-                    "draw": {k: v for k, v in d.items() if k not in ("spec",)}}
+            row = make_and_diagnose_or_fail(settings, d, make, work)
+            row["draw"] = {k: v for k, v in d.items() if k not in ("spec",)}
             with open(results_file, "a") as fh:
                 fh.write(json.dumps(row, default=float) + "\n")
-        if settings.pair_visibility and len(d["effects"]) == 2:
+        if settings.pair_visibility and len(d["effects"]) == 2 and row["status"] != "error":
             alone = effect_alone_gaps(settings, d, make, work)
             doc = json.loads((work / "diagnoses" / f"set_{d['index']:03d}" / "diagnosis.json").read_text())
             row = row | score_row(d["index"], d["effects"], doc, [e for e, a in alone.items() if a["no_gap"]])

@@ -21,11 +21,14 @@ def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
 
 
 def summarise(rows: list[dict]) -> dict:
-    """Scores of one source (see the module docstring)."""
-    scored = [r for r in rows if not r["invisible"]]
-    left_out = [r for r in rows if r["invisible"]]
+    """Scores of one source (see the module docstring). A set whose diagnosis raised is a miss of
+    every score it enters; one the source could not make is left out (``failed_sets`` lists both)."""
+    failed = [r for r in rows if r["status"] == "error"]
+    rows_made = [r for r in rows if r.get("error_stage") != "make"]
+    scored = [r for r in rows_made if not r["invisible"]]
+    left_out = [r for r in rows_made if r["invisible"]]
     eff_rows = [r for r in scored if r["truth"] != "none"]
-    free = [r for r in rows if r["truth"] == "none"]
+    free = [r for r in rows_made if r["truth"] == "none"]
     two = [r for r in scored if len(r["truth_effects"]) == 2]
     correct = [r for r in scored if r["truth"] == r["predicted"]]
     eff_correct = [r for r in eff_rows if r["truth"] == r["predicted"]]
@@ -43,6 +46,8 @@ def summarise(rows: list[dict]) -> dict:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
     return {
         "n": len(rows), "scored": len(scored),
+        "failed_sets": [{"index": r["index"], "truth": r["truth"], "stage": r["error_stage"], "message": r["verdict"]}
+                        for r in failed],
         "left_out_invisible": [{"index": r["index"], "truth": r["truth"], "gap_before": r["gap_before"]}
                                for r in left_out],
         "left_out_of_pairs": [{"index": r["index"], "injected": r["injected"], "effect": e,
@@ -86,6 +91,9 @@ def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) ->
              f"- median explained share of the excess held-out misfit, correct verdicts with effects: "
              f"{_pct(s['median_explained_share_correct'])}",
              "- statuses: " + ", ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items()))]
+    for r in s.get("failed_sets", []):
+        lines.append(f"- set {r['index']} ({r['truth']}): {r['message']}"
+                     + (" (left out of the score)" if r["stage"] == "make" else " (a miss)"))
     if s["left_out_invisible"]:
         lines.append("- left out of the score (injected, but the base model's held-out gap is within the noise "
                      "band): " + ", ".join(f"set {r['index']} ({r['truth']}, {r['gap_before']:.2f})"

@@ -327,3 +327,67 @@ def test_a_blind_sets_description_names_no_effect(tmp_path, monkeypatch):
     meta = yaml.safe_load((tmp_path / "set" / "meta.yaml").read_text())
     assert meta["kind"] == "startup"
     assert not any(e in meta["description"] for e in draws[0]["effects"]), meta["description"]
+
+
+def test_a_set_that_raises_is_kept_as_a_row_the_draw_goes_on_and_resume_tries_it_again(tmp_path, monkeypatch):
+    """A diagnosis that raises is that set's row (a miss, its message and traceback kept), a set
+    the source cannot make is left out of the scores and listed; the sets after both are diagnosed,
+    and a resumed run makes and diagnoses only the failed sets again."""
+    import json
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    import benchmark.analysis.blind as blind
+    import benchmark.analysis.blind_sources as sources
+    from benchmark.analysis.blind import BlindSettings, run_source
+
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        s = BlindSettings.from_run(compose("blind", overrides=[
+            "source=plant", "n=4", "seed=4", "free_share=0.25", "two_share=0", "plant_duration=0.1",
+            "plant_stop=false", "only_effects=[current_sensor_saturation]",
+            f"workdir={tmp_path / 'work'}", f"out={tmp_path / 'out'}"]))
+    broken = {"diagnose": {1}, "make": {2}}
+    diagnosed = []
+
+    def diagnose(settings, folder, outdir):
+        index = int(Path(folder).name.split("_")[1])
+        diagnosed.append(index)
+        if index in broken["diagnose"]:
+            return 1.0 / 0.0
+        status = "no_gap" if index == 0 else "unexplained"  # set 0 is the effect-free one
+        return {"status": status, "effects": [], "verdict": status, "explained_share": 0.0, "wall_time_s": 0.0,
+                "gap_before": {"heldout_rms_over_noise": 3.0}, "gap_after": {"heldout_rms_over_noise": 3.0}}
+
+    plant = sources.SOURCES["plant"]
+
+    def plant_with_a_broken_maker(settings):
+        draws, make = plant(settings)
+
+        def maker(d, folder):
+            if d["index"] in broken["make"]:
+                raise ValueError("the plant cannot make this motor")
+            return make(d, folder)
+        return draws, maker
+
+    monkeypatch.setattr(blind, "diagnose_folder", diagnose)
+    monkeypatch.setitem(sources.SOURCES, "plant", plant_with_a_broken_maker)
+    summary = run_source(s, "python -m benchmark.blind source=plant")
+    assert diagnosed == [0, 1, 3]
+    assert summary["n"] == 4 and summary["scored"] == 3  # set 2 (not made) left out
+    assert [(f["index"], f["stage"]) for f in summary["failed_sets"]] == [(1, "diagnose"), (2, "make")]
+    assert "ZeroDivisionError: float division by zero" in summary["failed_sets"][0]["message"]
+    assert summary["effect_sets"] == 2 and summary["effect_sets_exact"] == 0  # set 1 a miss, set 3 unexplained
+    assert summary["exact"] == 1 and summary["false_alarms"] == 0  # set 0: effect-free, no gap
+    err = (tmp_path / "work" / "plant" / "diagnoses" / "set_001" / "error.txt").read_text()
+    assert "ZeroDivisionError" in err and "Traceback" in err
+    report = (tmp_path / "out" / "plant" / "confusion.md").read_text()
+    assert "set 1 (current_sensor_saturation): diagnose raised ZeroDivisionError" in report
+    assert "set 2 (current_sensor_saturation): make raised ValueError" in report
+
+    broken["diagnose"], broken["make"], diagnosed[:] = set(), set(), []
+    summary = run_source(s, "python -m benchmark.blind source=plant")
+    assert diagnosed == [1, 2] and summary["failed_sets"] == [] and summary["scored"] == 4
+    rows = [json.loads(x) for x in (tmp_path / "work" / "plant" / "rows.jsonl").read_text().splitlines()]
+    assert [r["index"] for r in rows] == [0, 1, 2, 3, 1, 2]
