@@ -35,6 +35,7 @@ from benchmark.problems.timedomain.channel_timing import (
 )
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
 from benchmark.problems.timedomain.load_checks import check_records
+from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C
 
 VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"), ("v_rs", "v_st"))
 CURRENT_COLUMNS = (("i_alpha", "i_beta"), ("i_r", "i_s"))
@@ -225,8 +226,9 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
             optional[key] = float(meta[key])
     if meta.get("winding_temperature") is not None:
         theta = check_meta_type(meta_path, "winding_temperature", meta["winding_temperature"], float)
-        if not -60.0 <= theta <= 250.0:
-            raise DataError(meta_path, f"key 'winding_temperature' must be in deg C (-60 to 250), got {theta}")
+        lo, hi = WINDING_TEMPERATURE_RANGE_C
+        if not lo <= theta <= hi:
+            raise DataError(meta_path, f"key 'winding_temperature' must be in deg C ({lo:g} to {hi:g}), got {theta}")
         optional["winding_temperature"] = float(theta)
     if meta.get("nameplate") is not None:
         optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])

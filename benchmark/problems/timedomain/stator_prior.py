@@ -42,6 +42,16 @@ COPPER_ZERO_C = 234.5
 DEFAULT_TEMPERATURE_C = 20.0
 #: A calibration that changes a weight by less than this share changes nothing.
 CALIBRATION_TOLERANCE = 0.1
+#: Temperatures a copper winding can have, deg C (meta.yaml's ``winding_temperature`` is checked
+#: against them; a resistance that needs a temperature outside them is not the winding's alone).
+WINDING_TEMPERATURE_RANGE_C = (-60.0, 250.0)
+
+
+def copper_temperature(resistance: float, dc: float, winding_temperature: float | None = None) -> float:
+    """deg C at which a copper winding measured at ``dc`` ohm at ``winding_temperature`` deg C
+    (default 20) has ``resistance`` ohm: ``R / R_dc = (234.5 + theta) / (234.5 + theta_dc)``."""
+    theta = DEFAULT_TEMPERATURE_C if winding_temperature is None else float(winding_temperature)
+    return float(resistance) / float(dc) * (COPPER_ZERO_C + theta) - COPPER_ZERO_C
 
 
 def relative_spread(winding_temperature: float | None, spread_k: float = DEFAULT_SPREAD_K) -> float:

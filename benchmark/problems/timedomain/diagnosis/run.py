@@ -25,6 +25,7 @@ from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, 
 from benchmark.problems.timedomain.motor import PARAMETER_UNITS
 from benchmark.problems.timedomain.problem import problem_from_dataset
 from benchmark.problems.timedomain.settings import TimeDomainSettings
+from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C, copper_temperature
 from benchmark.problems.timedomain.stop_record import stop_record_check, stop_record_lines
 
 
@@ -103,6 +104,8 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
     doc["wall_time_base_identification_s"] = t_base
     doc["base_identification"] = base_runs
     doc["data"] = (run.get("data") or {}).get("path") or "synthetic (in memory; truth kept away)"
+    doc["stator_dc_resistance"] = stated_resistance_check(dataset, (doc.get("base") or {}).get("estimate") or {},
+                                                          problem_settings.stator_resistance)
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     write_text_atomic(outdir / "diagnosis.json", json.dumps(doc, indent=2) + "\n")
@@ -113,6 +116,40 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
         doc["figures"] = diagnosis_figures(models, doc, outdir)
         write_text_atomic(outdir / "diagnosis.json", json.dumps(doc, indent=2) + "\n")
     return doc
+
+
+def stated_resistance_check(dataset: StartupDataset, final: Mapping, rs_mode: str) -> dict | None:
+    """meta.yaml's ``stator_dc_resistance`` against the final model's Rs (None when the data set
+    states none): the deviation, the copper winding temperature it would take
+    (:func:`~benchmark.problems.timedomain.stator_prior.copper_temperature`), whether that is one a
+    winding can have, and whether the diagnosis used the stated value (only when asked:
+    ``problem.stator_resistance=prior|fixed``; its base keeps Rs free by default)."""
+    dc = getattr(dataset, "stator_dc_resistance", None)
+    if not dc or "Rs" not in final:
+        return None
+    theta_dc = getattr(dataset, "winding_temperature", None)
+    theta = copper_temperature(final["Rs"], dc, theta_dc)
+    lo, hi = WINDING_TEMPERATURE_RANGE_C
+    return {"ohm": float(dc), "winding_temperature_C": theta_dc, "final_Rs_ohm": float(final["Rs"]),
+            "relative_deviation": float(final["Rs"]) / float(dc) - 1.0, "copper_temperature_C": theta,
+            "copper_can_reach": bool(lo <= theta <= hi), "used": rs_mode in ("prior", "fixed")}
+
+
+def stated_resistance_lines(check: dict | None) -> list[str]:
+    """What diagnosis.md says about a stated DC stator resistance (:func:`stated_resistance_check`)."""
+    if not check:
+        return []
+    at = "" if check["winding_temperature_C"] is None else f" at {check['winding_temperature_C']:g} deg C"
+    used = ("used as the run asks (problem.stator_resistance)" if check["used"] else
+            "not used: the diagnosis fits Rs from the record (problem.stator_resistance=prior makes it a prior)")
+    line = (f"Stated DC stator resistance (meta.yaml): {check['ohm']:.4g} ohm{at}, {used}. The final model's Rs, "
+            f"{check['final_Rs_ohm']:.4g} ohm, is {100 * check['relative_deviation']:+.0f} % off it: a copper winding "
+            f"at {check['copper_temperature_C']:.0f} deg C")
+    if not check["copper_can_reach"]:
+        lo, hi = WINDING_TEMPERATURE_RANGE_C
+        line += (f", which no winding reaches ({lo:g} to {hi:g} deg C): the model's Rs stands for more than the "
+                 "winding (a drop, a heating, a form the model lacks)")
+    return [line + "."]
 
 
 def base_identification_lines(bi: dict | None) -> list[str]:
@@ -186,6 +223,7 @@ def render_markdown(doc: dict) -> str:
                          f"({c['heldout_chi2_put_back']:.4g} -> {c['heldout_chi2']:.4g}): "
                          + ("named." if c["earns"] else "not named (the models stay fitted to the conditioned "
                                                         "record)."))
+    lines += stated_resistance_lines(doc.get("stator_dc_resistance"))
     lines += base_identification_lines(doc.get("base_identification"))
     lines += ["", "## Where the base model misses", "",
               f"chi^2 per held-out residual: {loc['chi2_per_residual']:.3f}", "",
