@@ -11,7 +11,11 @@ from types import SimpleNamespace
 import pytest
 import yaml
 
-from benchmark.problems.timedomain.diagnosis.run import render_markdown, stated_resistance_check, stated_resistance_lines
+from benchmark.problems.timedomain.diagnosis.run import (
+    render_markdown,
+    stated_resistance_check,
+    stated_resistance_lines,
+)
 from benchmark.problems.timedomain.stator_prior import copper_temperature
 from tests.conftest import compose_config
 
@@ -43,8 +47,8 @@ def test_a_diagnosed_record_with_a_stated_resistance_reports_it(tmp_path):
     from benchmark.core.harness import run_diagnosis
 
     ds = tmp_path / "ds"
-    proc = subprocess.run([sys.executable, "-m", "synthetic", "effects=[]", "noise=noisy", f"out={ds}", "motor.test.cycles=10",
-                           "motor.test.stop_duration=2.0"], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "synthetic", "effects=[]", "noise=noisy", f"out={ds}",
+                           "motor.test.cycles=10", "motor.test.stop_duration=2.0"], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     rs_true = float(yaml.safe_load((ds / "truth.yaml").read_text())["parameters"]["Rs"])
     (ds / "truth.yaml").unlink()
