@@ -383,6 +383,9 @@ def run_source(settings: BlindSettings, command: str) -> dict:
         from benchmark.core.errors import ConfigError
 
         raise ConfigError(f"source: one of {sorted(SOURCES)}, got {source!r}")
+    from benchmark.problems.timedomain.diagnosis.run import diagnosis_settings
+
+    diagnosis_settings(settings.run)  # a mistyped diagnosis.* key stops here, not as a failed row per set
     draws, make = SOURCES[source](settings)
     work = settings.workdir / source
     rows = []

@@ -332,7 +332,9 @@ def test_a_blind_sets_description_names_no_effect(tmp_path, monkeypatch):
 def test_a_set_that_raises_is_kept_as_a_row_the_draw_goes_on_and_resume_tries_it_again(tmp_path, monkeypatch):
     """A diagnosis that raises is that set's row (a miss, its message and traceback kept), a set
     the source cannot make is left out of the scores and listed; the sets after both are diagnosed,
-    and a resumed run makes and diagnoses only the failed sets again."""
+    and a resumed run makes and diagnoses only the failed sets again. A mistyped diagnosis key is
+    the run's mistake: it stops before any set."""
+    import dataclasses
     import json
     from pathlib import Path
 
@@ -386,6 +388,11 @@ def test_a_set_that_raises_is_kept_as_a_row_the_draw_goes_on_and_resume_tries_it
     assert "set 1 (current_sensor_saturation): diagnose raised ZeroDivisionError" in report
     assert "set 2 (current_sensor_saturation): make raised ValueError" in report
 
+    from benchmark.core.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="diagnosis: unknown key"):  # the run's mistake: no set is made
+        run_source(dataclasses.replace(s, run={**s.run, "diagnosis": {**s.run["diagnosis"], "selection_shar": 0.3}}),
+                   "python -m benchmark.blind source=plant")
     broken["diagnose"], broken["make"], diagnosed[:] = set(), set(), []
     summary = run_source(s, "python -m benchmark.blind source=plant")
     assert diagnosed == [1, 2] and summary["failed_sets"] == [] and summary["scored"] == 4
