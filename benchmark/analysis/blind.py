@@ -109,6 +109,9 @@ class BlindSettings:
     plant_duration, plant_stop : the plant source's start-up (s; None: the plant's own draw) and
         whether it also records a stop.
     tuned_on : one line on what the diagnosis's thresholds were tuned on, for the report.
+    diagnosis_seed : the seed each diagnosis runs with (its base identification's), or None:
+        the draw's ``seed``. The same sets diagnosed with another seed show which verdicts hang
+        on where the local fits end.
     pair_visibility : (time domain) measure each effect of a two-effect set alone
         (:func:`~benchmark.analysis.blind_sources.effect_alone_gaps`); one within the noise band
         that the verdict does not name is left out of that set's score, as an invisible single
@@ -142,6 +145,7 @@ class BlindSettings:
     plant_duration: float | None = None
     plant_stop: bool = True
     tuned_on: str = ""
+    diagnosis_seed: int | None = None
     pair_visibility: bool = True
     run: Mapping = field(default_factory=dict, repr=False)
 
@@ -168,6 +172,7 @@ class BlindSettings:
             plant_duration=_float_or_none(run.get("plant_duration") or None),
             plant_stop=bool(run.get("plant_stop", True)), tuned_on=str(run.get("tuned_on", "")),
             pair_visibility=bool(run.get("pair_visibility", True)),
+            diagnosis_seed=None if run.get("diagnosis_seed") is None else int(run["diagnosis_seed"]),
             run=copy.deepcopy(dict(run)))
 
     @property
@@ -257,10 +262,14 @@ def generator_config(settings: BlindSettings, d: dict, scale_motor=None, no_effe
 
 def diagnosis_config(settings: BlindSettings, folder: Path) -> DictConfig:
     """The configuration the diagnosis gets for a data folder: a copy of the composed
-    configuration pointed at ``folder``, with no effects of its own and no figures."""
+    configuration pointed at ``folder``, with no effects of its own and no figures; its
+    ``seed`` (the base identification's) is ``settings.diagnosis_seed`` when given, else the
+    draw's."""
     c = _run_copy(settings)
     with open_dict(c):
         c.data.path = str(folder)
+        if settings.diagnosis_seed is not None:
+            c.seed = int(settings.diagnosis_seed)
         c.effects, c.effect_size, c.effect_form = [], {}, {}
         c.figures = False
     return c

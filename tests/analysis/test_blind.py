@@ -89,6 +89,12 @@ def test_settings_are_made_once_from_the_config_and_the_draws_use_each_effects_o
     diag = diagnosis_config(s, Path("/some/folder"))
     assert diag.data.path == "/some/folder" and list(diag.effects) == [] and diag.figures is False
     assert s.run["motor"]["parameters"]["Rs"] == cfg.motor.parameters.Rs  # the settings' copy is untouched
+    assert diag.seed == 4 and s.diagnosis_seed is None  # the diagnoses run with the draws' seed ...
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        other = BlindSettings.from_run(compose("blind", overrides=["n=12", "seed=4", "exclude_effects=[iron_loss]",
+                                                                "diagnosis_seed=0"]))
+    assert diagnosis_config(other, Path("/f")).seed == 0  # ... or with their own
+    assert draw_sets(other, exclude=s.in_base) == draws  # the same sets
 
 
 NEW_EFFECTS = ["current_sensor_saturation", "speed_sensor_gain", "sensor_offset", "two_mass", "load_torque",
