@@ -90,7 +90,8 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
     prediction where an effect is far from linear at its start, a load step's size beside its
     instant; the step where it overshoots a curved valley, a probe's level and sharpness);
     ``drop`` (the reference's ``score`` less the addition's);
-    ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates).
+    ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates);
+    ``point``, the parameters at which ``heldout_chi2`` was evaluated, by name.
 
     ``starts(model, x_fit, new)``: the linearisation points of an addition (each is tried, the
     one that fits ``fit_mask`` best after its step kept), e.g. a selection's own starts with a
@@ -129,6 +130,7 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
         k += len(Xs)
         ssr = np.sum(R[:, fit_mask] ** 2, axis=1)
         best = int(np.argmin(ssr))
+        row["point"] = dict(zip(model.names, map(float, plan[5][0] if best == 0 else Xs[best - 1]), strict=True))
         row["heldout_chi2"] = float(np.mean(R[best][held_mask] ** 2))
         row["step_fraction"] = ([0.0] + list(STEP_FRACTIONS))[best]
         row["score"] = min(row["heldout_chi2"], row["predicted_heldout_chi2"])

@@ -31,9 +31,11 @@ class Screening:
         :meth:`profiled`) and scored on the other fold; the two folds' held-out chi^2 pooled as
         :attr:`SetFit.chi2` pools them. Each candidate's test depends on ``cur``'s fit and the
         candidate alone: kept in ``screened_beside`` (a round that starts from the same fit again,
-        after an effect negligible on entry left, screens only what it has not)."""
+        after an effect negligible on entry left, screens only what it has not), and each fold's
+        point the test scored (:meth:`screened_points`)."""
         key = (tuple(cur.names), *(cur.xs[f].tobytes() for f in FOLDS))
         kept = self.screened_beside.setdefault(key, {})
+        points = self.screened_at.setdefault(key, {})
         todo = [e for e in pool if e.name not in kept]
 
         def fold(f):
@@ -46,13 +48,21 @@ class Screening:
             rows = score_tests(self.in_given_order, cur.effects, cur.xs[f], self.masks[f], self.masks[other],
                                [(e,) for e in todo], self.ctx, starts=starts)
             n = int(np.count_nonzero(self.masks[other]))
-            return {r["effect"]: n * r["score"] for r in rows}
+            return {r["effect"]: (n * r["score"], r["point"]) for r in rows}
 
         if todo:
             parts = side_by_side(fold, FOLDS)
             total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
-            kept |= {e.name: (parts[0][e.name] + parts[1][e.name]) / total for e in todo}
+            kept |= {e.name: (parts[0][e.name][0] + parts[1][e.name][0]) / total for e in todo}
+            points |= {e.name: {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)} for e in todo}
         return {e.name: kept[e.name] for e in pool}
+
+    def screened_points(self, cur: SetFit, name: str) -> dict[str, list[dict[str, float]]]:
+        """Per fold, the point at which candidate ``name``'s screening beside ``cur`` scored it
+        (:meth:`screen_singles`; parameter names to values), as further starts of its fit."""
+        key = (tuple(cur.names), *(cur.xs[f].tobytes() for f in FOLDS))
+        at = self.screened_at.get(key, {}).get(name, {})
+        return {f: [point] for f, point in at.items()}
 
     def fold_b(self, sf: SetFit) -> float:
         """Fold B's held-out chi^2 of ``sf`` (fold B predicted by the fit on fold A)."""
