@@ -335,7 +335,7 @@ def make_and_diagnose_or_fail(settings: BlindSettings, d: dict, make, work: Path
         folder = make_set(d, make, work)
         stage = "diagnose"
         doc = diagnose_folder(settings, folder, outdir)
-    except Exception as error:  # noqa: BLE001  (any failure of one set is that set's row)
+    except Exception as error:  # any failure of one set is that set's row
         outdir.mkdir(parents=True, exist_ok=True)
         write_text_atomic(outdir / "error.txt", traceback.format_exc())
         return failed_row(d["index"], d["effects"], stage, error) | {"wall_time_s": math.nan}

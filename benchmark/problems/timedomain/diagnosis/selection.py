@@ -96,7 +96,7 @@ class Selector(Screening):
         fold fit of every set side by side (a set's two folds need not wait for another set's),
         then each set's folds agreed and cross-started. A job may hold a fourth item, more
         starts by fold (``{fold: [{parameter name: value}, ...]}``), which makes it a refit of its own."""
-        plans = [self._plan(*job[:3], progress, *job[3:]) for job in jobs]  # noqa: B026  (more after progress)
+        plans = [self._plan(*job[:3], progress, *job[3:]) for job in jobs]
         todo = [(p, f) for p in plans if not isinstance(p, SetFit) for f in FOLDS]
         done = side_by_side(lambda item: item[0]["fold_fit"](item[1]), todo)
         xs: dict = {}
