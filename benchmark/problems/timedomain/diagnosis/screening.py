@@ -14,10 +14,15 @@ from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 from benchmark.problems.timedomain.diagnosis.set_fit import FOLDS, SetFit
 
 
+def _fit_key(cur: SetFit) -> tuple:
+    """The key of a set's fit in ``screened_beside``: its effects and each fold's parameters."""
+    return (tuple(cur.names), *(cur.xs[f].tobytes() for f in FOLDS))
+
+
 class Screening:
     """The screening part of :class:`.selection.Selector` (it provides ``data``, ``settings``,
     ``ctx``, ``centre``, ``fc_scale``, ``masks``, ``rule``, the starts, :meth:`composed`,
-    :meth:`profiled` and :meth:`fits`, and ``screened_beside`` and ``screened_at``, dicts), with
+    :meth:`profiled` and :meth:`fits`, and ``screened_beside``, a dict), with
     the refit of a fit that missed the basin its screening reached (:meth:`missed_basins`)."""
 
     def in_given_order(self, effects) -> JointModel:
@@ -33,11 +38,9 @@ class Screening:
         :meth:`profiled`) and scored on the other fold; the two folds' held-out chi^2 pooled as
         :attr:`SetFit.chi2` pools them. Each candidate's test depends on ``cur``'s fit and the
         candidate alone: kept in ``screened_beside`` (a round that starts from the same fit again,
-        after an effect negligible on entry left, screens only what it has not), and each fold's
+        after an effect negligible on entry left, screens only what it has not), with each fold's
         point the test scored (:meth:`screened_points`)."""
-        key = (tuple(cur.names), *(cur.xs[f].tobytes() for f in FOLDS))
-        kept = self.screened_beside.setdefault(key, {})
-        points = self.screened_at.setdefault(key, {})
+        kept = self.screened_beside.setdefault(_fit_key(cur), {})
         todo = [e for e in pool if e.name not in kept]
 
         def fold(f):
@@ -55,15 +58,14 @@ class Screening:
         if todo:
             parts = side_by_side(fold, FOLDS)
             total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
-            kept |= {e.name: (parts[0][e.name][0] + parts[1][e.name][0]) / total for e in todo}
-            points |= {e.name: {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)} for e in todo}
-        return {e.name: kept[e.name] for e in pool}
+            kept |= {e.name: ((parts[0][e.name][0] + parts[1][e.name][0]) / total,
+                              {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)}) for e in todo}
+        return {e.name: kept[e.name][0] for e in pool}
 
     def screened_points(self, cur: SetFit, name: str) -> dict[str, list[dict[str, float]]]:
         """Per fold, the point at which candidate ``name``'s screening beside ``cur`` scored it
         (:meth:`screen_singles`; parameter names to values), as further starts of its fit."""
-        key = (tuple(cur.names), *(cur.xs[f].tobytes() for f in FOLDS))
-        at = self.screened_at.get(key, {}).get(name, {})
+        _, at = self.screened_beside.get(_fit_key(cur), {}).get(name, (None, {}))
         return {f: [point] for f, point in at.items()}
 
     def fold_b(self, sf: SetFit) -> float:
