@@ -20,8 +20,9 @@ current at rest), every channel's noise is the spread of that quiet segment
   every two periods, with at least a 20 % relative uncertainty;
 * speed: over the steady state, the smaller of a Savitzky-Golay fit's residual
   (:func:`noise_from_smooth`) and the same drifting-harmonics fit as the currents at the orders
-  where a supply makes the torque pulsate (see :func:`steady_speed_noise`: each leaves some
-  signal in, in different records);
+  where this record's supply makes the torque pulsate (:func:`supplied_torque_orders`: the
+  measured voltage's harmonics; see :func:`steady_speed_noise`: each fit leaves some signal
+  in, in different records);
 * stop record: a smooth fit over the free motion.
 
 Segments too short for these fall back to a fourth-difference estimate (white noise only),
@@ -34,6 +35,7 @@ is 1e-4 of its peak for a current, 1e-5 for a speed (:data:`NOISE_FREE_FLOOR`,
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -131,14 +133,15 @@ def fallback(x: np.ndarray, floor: float, why: str) -> NoiseEstimate:
 
 def modulated_periodic_residual(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
                                 rel_line: float = 1e-3, knot_periods: float | None = None,
-                                harmonics: str = "all") -> tuple[np.ndarray, np.ndarray, int]:
+                                harmonics: str | Sequence[int] = "all") -> tuple[np.ndarray, np.ndarray, int]:
     """What is left of ``x`` after least squares on the supply's harmonics, each modulated by
     an envelope (and an envelope trend): a polynomial in time of ``order``, or, with
     ``knot_periods``, a piecewise-linear curve with a knot every ``knot_periods`` supply periods
     (it follows a start-up's current as it falls within a few periods). The harmonics kept are
     those whose amplitude in a plain periodic fit exceeds ``rel_line`` of the largest, among
-    every order (``harmonics="all"``) or, with ``harmonics="torque"``, only the orders at which
-    a three-phase supply makes the torque pulsate (:func:`torque_harmonic_orders`). Returns the
+    every order (``harmonics="all"``), with ``harmonics="torque"`` only the orders at which
+    a three-phase supply makes the torque pulsate (:func:`torque_harmonic_orders`), or among
+    the orders given (those up to the Nyquist order). Returns the
     residual, each column's normalised frequency (rad per sample) and the harmonics kept."""
     x = np.asarray(x, float).ravel()
     n = len(x)
@@ -146,9 +149,12 @@ def modulated_periodic_residual(x, fs: float, f0: float, order: int = 2, n_harmo
     tau = np.linspace(-1.0, 1.0, n)
     h_max = int(n_harmonics or 0.48 * fs / f0)
     w = 2 * np.pi * f0 * t
-    if harmonics not in ("all", "torque"):
-        raise ValueError(f"harmonics must be 'all' or 'torque', got {harmonics!r}")
-    orders = np.arange(1, h_max + 1) if harmonics == "all" else torque_harmonic_orders(h_max)
+    if isinstance(harmonics, str):
+        if harmonics not in ("all", "torque"):
+            raise ValueError(f"harmonics must be 'all', 'torque' or a list of orders, got {harmonics!r}")
+        orders = np.arange(1, h_max + 1) if harmonics == "all" else torque_harmonic_orders(h_max)
+    else:
+        orders = np.array([h for h in harmonics if 1 <= h <= h_max], dtype=int)
     plain = [np.ones(n)]
     for h in orders:
         plain += [np.cos(h * w), np.sin(h * w)]
@@ -181,9 +187,29 @@ def torque_harmonic_orders(h_max: int) -> np.ndarray:
     return np.array([h for h in range(2, h_max + 1) if h == 2 or h % 6 == 0], dtype=int)
 
 
+def supplied_torque_orders(v_alpha, v_beta, fs: float, f0: float, rel_line: float = 1e-3) -> np.ndarray:
+    """The :func:`torque_harmonic_orders` at which this supply makes the torque pulsate: an order
+    ``m`` where the measured voltage (``v_alpha``, ``v_beta``, V, sampled at ``fs`` Hz) holds a
+    line at a signed order ``h`` of ``f0`` (Hz) with ``|h - 1| = m`` (its negative sequence at
+    ``-1`` for 2, the 5th at ``-5`` and the 7th at ``+7`` for 6, ...) larger than ``rel_line``
+    of the fundamental. A grid's voltage has a 5th and a 7th and no 11th or 13th, so its motor's
+    torque has no 12th: a speed line there is the sensor's (a 4-pole motor's tachometer with 24
+    segments near synchronous speed, ~599 Hz), noise to a model the supply cannot make pulsate
+    there; a six-step inverter's voltage holds every ``6k +- 1`` and keeps every multiple of 6."""
+    v = np.asarray(v_alpha, float) + 1j * np.asarray(v_beta, float)
+    h_max = int(0.48 * fs / f0)
+    orders = np.arange(-h_max, h_max + 1)
+    w = 2 * np.pi * f0 * np.arange(len(v)) / fs
+    A = np.exp(1j * np.outer(w, orders))
+    amp = np.abs(np.linalg.lstsq(A, v, rcond=None)[0])
+    fundamental = amp[orders == 1][0]
+    present = {abs(int(h) - 1) for h, a in zip(orders, amp, strict=True) if h != 1 and a > rel_line * fundamental}
+    return np.array([m for m in torque_harmonic_orders(h_max) if m in present], dtype=int)
+
+
 def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
                                   rel_line: float = 1e-3, knot_periods: float | None = None,
-                                  harmonics: str = "all") -> NoiseEstimate:
+                                  harmonics: str | Sequence[int] = "all") -> NoiseEstimate:
     """Noise of a periodic segment whose amplitude still drifts (the end of a start-up): the
     spread of :func:`modulated_periodic_residual`. Each column at ``omega`` absorbs
     ``g(omega)`` noise degrees of freedom (``g`` the AR(1) spectrum of the residual relative to
@@ -194,7 +220,7 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
 
 def modulated_periodic_noise(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
                              rel_line: float = 1e-3, knot_periods: float | None = None,
-                             harmonics: str = "all") -> tuple[NoiseEstimate, np.ndarray]:
+                             harmonics: str | Sequence[int] = "all") -> tuple[NoiseEstimate, np.ndarray]:
     """:func:`noise_from_modulated_periodic` and the residual it is the spread of (one fit)."""
     e, om, kept = modulated_periodic_residual(x, fs, f0, order, n_harmonics, rel_line, knot_periods, harmonics)
     phi = ar1_coefficient(e)
@@ -341,13 +367,15 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
     if has_speed:
         floor = SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
         try:
-            out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0), speed, floor)
+            orders = supplied_torque_orders(v_alpha[k_ss:], v_beta[k_ss:], fs, f0)
+            out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0, orders), speed, floor)
         except ValueError as exc:
             out["speed"] = fallback(speed, floor, str(exc))
     return out
 
 
-def steady_speed_noise(x: np.ndarray, fs: float, f0: float) -> NoiseEstimate:
+def steady_speed_noise(x: np.ndarray, fs: float, f0: float,
+                       orders: str | Sequence[int] = "torque") -> NoiseEstimate:
     """Noise of the speed's steady state ``x`` (rad/s): the smaller of a Savitzky-Golay fit's
     residual (window up to 101 samples) and, over two supply periods or more, the drifting
     lines of the supply ``f0`` (Hz) at which the torque pulsates (:func:`torque_harmonic_orders`),
@@ -358,12 +386,14 @@ def steady_speed_noise(x: np.ndarray, fs: float, f0: float) -> NoiseEstimate:
     leaves it in (1.37-1.41), the smoothing takes it out (1.03-1.04). Both came within 5 % of it
     on direct-on-line starts. A tachometer's commutator ripple is noise to the model; fitted at
     every supply harmonic it was taken out wherever it fell beside one (a 6-pole motor's 18 per
-    revolution at 357 Hz beside the 6th: 0.070 rad/s against 0.095 really added)."""
+    revolution at 357 Hz beside the 6th: 0.070 rad/s against 0.095 really added). ``orders``:
+    the torque lines fitted, all of them (``"torque"``) or those the supply makes
+    (:func:`supplied_torque_orders`, as :func:`startup_noise` calls it)."""
     window = int(min(101, len(x) // 3)) | 1
     est = noise_from_smooth(x, window)
     if len(x) / fs * f0 >= 2:
         try:
-            periodic = noise_from_modulated_periodic(x, fs, f0, harmonics="torque")
+            periodic = noise_from_modulated_periodic(x, fs, f0, harmonics=orders)
         except (ValueError, np.linalg.LinAlgError):
             return est
         if periodic.std < est.std:
