@@ -216,7 +216,9 @@ def test_a_slow_vf_ramp_under_noisy_currents_is_no_pre_trigger():
     v, i = np.vstack([s["v_r"], s["v_s"], s["v_t"]]), np.vstack([s["i_r"], s["i_s"]])
     k = detect_switch_on(v, ts)
     assert k is not None and k >= 50  # long enough for a pre-trigger mean
-    assert current_departure(i, ts, k) is None  # the rest check alone misses it
+    # the rest check, its rest level the first millisecond's median (the first 5 ms' before,
+    # which a rising current lifted: it missed this start), sees the current move 66 samples early
+    assert current_departure(i, ts, k) == 36
     assert np.mean(i[0, :k]) > 0.4  # the current the old conditioning removed as an offset
     assert voltage_rises_before(v, k)
     _, rep = condition_record(v, i, ts, f0=50.0)
@@ -265,6 +267,36 @@ def test_a_boost_just_under_the_contact_level_is_no_pre_trigger():
     k2 = detect_switch_on(v2, TS)
     assert not voltage_live_from_start(v2 + 4.0, k2, current_departure(i2, TS, k2))
     assert condition_record(v2 + 4.0, i2, TS, f0=F0)[1].switch_on is not None
+
+
+def test_a_boost_start_whose_current_rises_from_the_first_sample_is_no_pre_trigger():
+    """The independent plant's 7.5 kW PWM start (calibration n=20 seed=501, plant set 2, effect
+    free: a 0.25 s V/f ramp from a 3.4 % boost, current noise 0.18 A white, 0.09 A steps): 11.3 V
+    at the first sample, the contact level reached 22 samples later, the current already 3.5 A
+    there. The rest check took its rest level as the median of the first 5 ms, here the whole
+    rising stretch (1.5 A), so the current never left it by 8 sigma; the voltage rises by less than
+    1 % of the level; 12 samples were trimmed as a pre-trigger and the model, started from rest,
+    missed the first 10 ms by 1-2 A (the diagnosis: ``unexplained`` at 1.135 times the noise,
+    ``no_gap`` at 1.011 once kept). The rest level is now the first millisecond's median."""
+    from benchmark.problems.timedomain.switch_on import current_departure, voltage_rises_before
+    from synthetic.independent import make_dataset, make_spec
+
+    noise = dict(current_white=0.1817, current_colored=0.0196, current_pole=0.949, current_quantum=0.0918,
+                 voltage_white=0.178, voltage_quantum=0.0, speed_white=0.0344, speed_quantum=0.0)
+    spec = make_spec("simulink_7k5", "pwm", [], seed=2051582082, duration=0.6, noise=noise)  # the set's seed
+    spec["machine"] = dict(Rs=0.7571, Rr=0.6707, Lm=0.12762, Lls=0.003033, Llr=0.002409, J=0.03061,
+                           fv=0.002249, fc=0.5159)
+    spec["scenario"].update(boost=0.0345, ramp=0.2537)
+    made = make_dataset(spec)
+    s, ts = made.startup, float(made.meta["sample_time"])
+    v, i = np.vstack([s["v_r"], s["v_s"], s["v_t"]]), np.vstack([s["i_r"], s["i_s"]])
+    k = detect_switch_on(v, ts)
+    assert k is not None and 10 <= k <= 40, k
+    assert not voltage_rises_before(v, k)
+    k_rest = current_departure(i, ts, k)
+    assert k_rest is not None and k_rest < k - 3, (k_rest, k)
+    rec, rep = condition_record(v, i, ts, f0=50.0)
+    assert rep.switch_on is None and rec.first == 0, rep.notes
 
 
 def test_true_pre_trigger_is_kept_with_the_rest_check():
