@@ -125,8 +125,9 @@ def current_departure(i, ts: float, k_on: int | None, *, smooth_s: float = 1e-3)
     sensor offset. Each current, smoothed over ``smooth_s``, is compared with its rest level,
     its median over the first ``smooth_s`` (over the first five, a current rising from the first
     sample lifted the level with it: the independent plant's 7.5 kW PWM start from a 3.4 % boost,
-    3.5 A at the contact 22 samples in, was taken for a pre-trigger); the threshold is ``max(REST_NOISE_K sigma, REST_LEVEL peak)``, ``sigma``
-    the sample noise from the median absolute first difference.
+    3.5 A at the contact 22 samples in, was taken for a pre-trigger); the threshold is
+    ``max(REST_NOISE_K sigma, REST_LEVEL peak)``, ``sigma`` the sample noise from the median
+    absolute first difference.
 
     ``i`` : (2, n) currents in A.  ``ts`` : sample time in s.  ``k_on`` : the voltage's switch-on.
     """
