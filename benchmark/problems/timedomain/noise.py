@@ -187,6 +187,11 @@ def torque_harmonic_orders(h_max: int) -> np.ndarray:
     return np.array([h for h in range(2, h_max + 1) if h == 2 or h % 6 == 0], dtype=int)
 
 
+#: :func:`supplied_torque_orders` reads the voltage's lines over at most this many supply periods
+#: (memory only: the records so far have at most 40 periods of steady state).
+SUPPLY_LINE_PERIODS = 100
+
+
 def supplied_torque_orders(v_alpha, v_beta, fs: float, f0: float, rel_line: float = 1e-3) -> np.ndarray:
     """The :func:`torque_harmonic_orders` at which this supply makes the torque pulsate: an order
     ``m`` where the measured voltage (``v_alpha``, ``v_beta``, V, sampled at ``fs`` Hz) holds a
@@ -195,8 +200,12 @@ def supplied_torque_orders(v_alpha, v_beta, fs: float, f0: float, rel_line: floa
     of the fundamental. A grid's voltage has a 5th and a 7th and no 11th or 13th, so its motor's
     torque has no 12th: a speed line there is the sensor's (a 4-pole motor's tachometer with 24
     segments near synchronous speed, ~599 Hz), noise to a model the supply cannot make pulsate
-    there; a six-step inverter's voltage holds every ``6k +- 1`` and keeps every multiple of 6."""
-    v = np.asarray(v_alpha, float) + 1j * np.asarray(v_beta, float)
+    there; a six-step inverter's voltage holds every ``6k +- 1`` and keeps every multiple of 6.
+    The lines are read over the last :data:`SUPPLY_LINE_PERIODS` periods at most (the fit's
+    matrix grows with the samples times the orders: a long record at a high rate would take
+    gigabytes; a steady supply's lines are there in any stretch of it)."""
+    n_max = int(SUPPLY_LINE_PERIODS * fs / f0)
+    v = (np.asarray(v_alpha, float) + 1j * np.asarray(v_beta, float))[-n_max:]
     h_max = int(0.48 * fs / f0)
     orders = np.arange(-h_max, h_max + 1)
     w = 2 * np.pi * f0 * np.arange(len(v)) / fs
