@@ -112,7 +112,9 @@ def noise_from_quiet(x, *, detrend: bool = False) -> NoiseEstimate:
     return estimate_noise(e, p_eff, "quiet segment" + (" (detrended)" if detrend else ""))
 
 
-def _harmonic_design(n: int, fs: float, f: float, n_harmonics: int, trend: bool):
+def harmonic_design(n: int, fs: float, f: float, n_harmonics: int, trend: bool):
+    """Columns ``1`` (and a linear trend), then ``cos, sin`` of each harmonic of ``f`` (Hz) below
+    Nyquist over ``n`` samples at ``fs`` Hz; and each column's frequency (rad per sample)."""
     t = np.arange(n) / fs
     cols, omegas = [np.ones(n)], [0.0]
     if trend:
@@ -137,7 +139,7 @@ def least_squares_solve(A: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def _harmonic_residual(x, fs, f, n_harmonics, trend):
-    A, om = _harmonic_design(len(x), fs, f, n_harmonics, trend)
+    A, om = harmonic_design(len(x), fs, f, n_harmonics, trend)
     return x - A @ least_squares_solve(A, x), om
 
 
@@ -155,7 +157,7 @@ def refine_frequency(x, fs: float, f0: float, n_harmonics: int = 10, f0_range: f
     f = float(grid[int(np.argmin([np.sum(_harmonic_residual(x, fs, g, n_harmonics, trend)[0] ** 2)
                                   for g in grid]))])
     for _ in range(3):
-        A, om = _harmonic_design(n, fs, f, n_harmonics, trend)
+        A, om = harmonic_design(n, fs, f, n_harmonics, trend)
         c = least_squares_solve(A, x)
         m = 1 + trend
         h = (np.arange(len(om) - m) // 2 + 1)[::2]

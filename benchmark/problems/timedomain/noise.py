@@ -44,6 +44,7 @@ from benchmark.core.noise_estimates import (
     ar1_coefficient,
     ar1_gain,
     estimate_noise,
+    harmonic_design,
     least_squares_solve,
     noise_from_quiet,
     noise_from_smooth,
@@ -207,12 +208,15 @@ def supplied_torque_orders(v_alpha, v_beta, fs: float, f0: float, rel_line: floa
     n_max = int(SUPPLY_LINE_PERIODS * fs / f0)
     v = (np.asarray(v_alpha, float) + 1j * np.asarray(v_beta, float))[-n_max:]
     h_max = int(0.48 * fs / f0)
-    orders = np.arange(-h_max, h_max + 1)
-    w = 2 * np.pi * f0 * np.arange(len(v)) / fs
-    A = np.exp(1j * np.outer(w, orders))
-    amp = np.abs(np.linalg.lstsq(A, v, rcond=None)[0])
-    fundamental = amp[orders == 1][0]
-    present = {abs(int(h) - 1) for h, a in zip(orders, amp, strict=True) if h != 1 and a > rel_line * fundamental}
+    A, _ = harmonic_design(len(v), fs, f0, h_max, trend=False)
+    c = least_squares_solve(A, v)  # the alpha and beta fits at once: cos, sin coefficients of each order
+    k = len(c) // 2
+    c_cos, c_sin = c[1::2][:k], c[2::2][:k]
+    amp = {0: abs(c[0])}  # the signed lines e^{jhw}: (c_cos -+ j c_sin) / 2 at +-h
+    for h in range(1, k + 1):
+        amp[h] = abs(c_cos[h - 1] - 1j * c_sin[h - 1]) / 2
+        amp[-h] = abs(c_cos[h - 1] + 1j * c_sin[h - 1]) / 2
+    present = {abs(h - 1) for h, a in amp.items() if h != 1 and a > rel_line * amp[1]}
     return np.array([m for m in torque_harmonic_orders(h_max) if m in present], dtype=int)
 
 
