@@ -246,6 +246,17 @@ class Effect:
         NEGLIGIBLE_SHARE`)."""
         return None
 
+    def measured_directly(self, ctx: EffectContext) -> bool:
+        """Whether the record measures this effect's parameters itself, apart from the fit (then
+        :meth:`contradicted` checks a fit against that measurement before the effect is named)."""
+        return False
+
+    def contradicted(self, extras: np.ndarray, standard_errors: np.ndarray, ctx: EffectContext) -> str | None:
+        """Why the record's own measurement of the effect (:meth:`measured_directly`) excludes
+        the fitted ``extras`` (with their ``standard_errors``), or None: a fit the measurement
+        excludes took up another form's leftover, and the diagnosis does not name it."""
+        return None
+
     def describe_fit(self, extras: np.ndarray, ctx: EffectContext, base: dict | None = None) -> dict:
         """Fitted extra parameters in physical terms, for reports (name -> value); ``base``:
         the fitted base parameters (``Rs, Ls, Le, Rr, J, fv, fc``) when the report has them."""

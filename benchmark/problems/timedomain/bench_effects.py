@@ -57,6 +57,7 @@ from scipy import signal
 
 from benchmark.core.effects import Effect
 from benchmark.problems.timedomain.channel_timing import current_lags, delay_phase_currents, fractional_delay
+from benchmark.problems.timedomain.conditioning import OFFSET_COMPONENTS, OFFSET_STANDARD_ERRORS
 from benchmark.problems.timedomain.extended import IDX
 
 SQ3 = math.sqrt(3.0)
@@ -306,6 +307,41 @@ class SensorOffset(Effect):
         out[:, 0] = sim[:, 0] + extras[:, 2:3] * ctx.I_peak
         out[:, 1] = sim[:, 1] + extras[:, 3:4] * ctx.I_peak
         return out
+
+    def measured_directly(self, ctx):
+        """On a grid supply only (voltages measured, no DC link): a grid's voltage has no DC
+        part, so the steady tail's means are the sensors' offsets. An inverter's applied voltage
+        may carry one (a dead-time asymmetry) and drive a true DC current, which the model, fed
+        that voltage, shares with the record; its tail's current means are no sensor's alone."""
+        facts = ctx.facts
+        grid = not facts.get("dc_link_voltage") and facts.get("input_hold") != "zoh"
+        return grid and bool(facts.get("offsets_left"))
+
+    def contradicted(self, extras, standard_errors, ctx):
+        """The conditioning measured each channel's offset on the steady tail (whole supply
+        periods, where neither the supply nor the machine's currents have a DC part) and left it
+        in the record (``facts["offsets_left"]``, :func:`~benchmark.problems.timedomain.
+        conditioning.offsets_left`). Where the tail finds no offset left on any channel (each
+        within the conditioning's ``OFFSET_STANDARD_ERRORS`` of its standard error), a fitted
+        offset more than that many combined standard errors from it is no offset (independent
+        plant, calibration seed 501 set 15: 0.23 +- 0.05 A fitted beside a skew, taking what the
+        skew's form left of a voltage lag, where the tail measured 0.001 +- 0.006 A). Where the
+        tail finds one, the fit is not checked: a probe's offset may drift over the record, and
+        the constant fitted to it is a compromise the tail's end need not agree with (held-out
+        plant 414 set 22, a thermal drift: -0.13 A fitted, -0.10 A at the tail)."""
+        scale = np.array([ctx.V1, ctx.V1, ctx.I_peak, ctx.I_peak])
+        fitted, se = np.ravel(extras) * scale, np.ravel(standard_errors) * scale
+        left = ctx.facts["offsets_left"]
+        if any(abs(value) > OFFSET_STANDARD_ERRORS * value_se for value, value_se in left.values()):
+            return None  # the tail finds an offset: a constant fitted to a drifting one lies elsewhere
+        z = {k: abs(fitted[k] - left[name][0]) / math.hypot(se[k], left[name][1])
+             for k, name in enumerate(OFFSET_COMPONENTS) if name in left}
+        k = max(z, key=lambda k: z[k] if np.isfinite(z[k]) else -1.0, default=None)
+        if k is None or not z[k] > OFFSET_STANDARD_ERRORS:
+            return None
+        name, unit = OFFSET_COMPONENTS[k], "V" if k < 2 else "A"
+        return (f"its {name} offset {fitted[k]:.3g} +- {se[k]:.2g} {unit} is {z[k]:.1f} standard errors from "
+                f"the {left[name][0]:.3g} +- {left[name][1]:.2g} {unit} the record's steady tail measures")
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)

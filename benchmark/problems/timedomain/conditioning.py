@@ -43,11 +43,16 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import condition_record, pretrigger_segment
+from benchmark.problems.timedomain.record_conditioning import condition_record, estimate_offsets, pretrigger_segment
 from benchmark.problems.timedomain.switch_on import SwitchingSteps, sampled_volt_seconds, switching_steps
 
 #: Key of ``StartupRecord.removed`` holding the pre-trigger samples the offsets were measured on.
 AT_REST = "sensor_offset_at_rest"
+#: Key of ``StartupRecord.removed`` holding the offsets measured on the steady tail, removed or not,
+#: pre-trigger or none (:func:`tail_offsets`, read back by :func:`offsets_left`).
+MEASURED = "sensor_offset_measured"
+#: The alpha-beta offset components, in the order of ``StartupRecord.removed["sensor_offset"]``.
+OFFSET_COMPONENTS = ("v_alpha", "v_beta", "i_alpha", "i_beta")
 
 #: An offset is removed only when it exceeds this fraction of its channel's amplitude.
 OFFSET_SIGNIFICANCE = 1e-3
@@ -197,6 +202,9 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
             put_back[AT_REST] = at_rest
     if n_masked:
         put_back["current_sensor_saturation"] = ~weight
+    measured = tail_offsets(v, i, ts, report.f0, cond.weight, measured_voltage)
+    if measured is not None:
+        put_back[MEASURED] = measured
     speed_out, speed_offset = rec.speed, 0.0
     if speed is not None and np.isfinite(report.speed_offset):
         speed_out, speed_offset = rec.speed - report.speed_offset, float(report.speed_offset)
@@ -217,7 +225,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     continuous = continuous_voltage or steps is not None  # a measured switch-on: a continuous supply
     if (first == 0 and not removed and not n_masked and speed_out is rec.speed and steps is None
             and not continuous):
-        return rec, said, found, speed_offset
+        return (rec if not put_back else replace(rec, removed=put_back)), said, found, speed_offset
     v_a, v_b = clarke(v_out[0], v_out[1], v_out[2])
     i_a, i_b = clarke(i_out[0], i_out[1], -i_out[0] - i_out[1])
     sl = slice(first, n)
@@ -239,6 +247,55 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         switch_on_sample=None if steps is None else steps.steps[-1] + 1,
         removed=put_back or None, columns=rec.columns,
     ), said, found, speed_offset
+
+
+def tail_offsets(v: np.ndarray, i: np.ndarray, ts: float, f0: float, weight: np.ndarray,
+                 measured_voltage: bool) -> dict[str, tuple[float, float]] | None:
+    """Each channel's offset measured on the steady tail (:func:`~benchmark.problems.timedomain.
+    record_conditioning.estimate_offsets` without a pre-trigger: after the start, where a probe's
+    remanence from the inrush is in it too) as alpha-beta components (:data:`OFFSET_COMPONENTS`,
+    V and A) -> (value, standard error), the phases' errors taken as independent. ``v`` (3, n),
+    ``i`` (2, n) phase channels; ``weight`` (2, m) the currents' kept samples from the end; the
+    voltages only when measured (``measured_voltage``). None when the tail is not steady
+    (:func:`steady_tail`) or too short."""
+    if not steady_tail(i, ts, f0):
+        return None
+    mask = np.zeros(i.shape, bool)
+    mask[:, i.shape[1] - weight.shape[1]:] = ~weight
+    channels = [(v, (None,) * 3, lambda r, s, t: clarke(r, s, t))] if measured_voltage else []
+    channels.append((i, mask, lambda r, s: clarke(r, s, -r - s)))
+    out = {}
+    for (x, m, to_ab), kind in zip(channels, ("v", "i")[-len(channels):], strict=True):
+        try:
+            found = [estimate_offsets(row, ts, None, f0, mask=mk) for row, mk in zip(x, m, strict=True)]
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        values = to_ab(*(value for value, _, _ in found))
+        gains = np.array([to_ab(*unit) for unit in np.eye(len(found))])  # (phase, alpha/beta)
+        ses = np.sqrt(np.array([se for _, _, se in found]) ** 2 @ gains**2)
+        for j, part in enumerate(("alpha", "beta")):
+            out[f"{kind}_{part}"] = (float(values[j]), float(ses[j]))
+    return out or None
+
+
+def offsets_left(ds: StartupDataset) -> dict[str, tuple[float, float]]:
+    """The offsets the conditioning measured on the records' steady tails and left in ``ds``
+    (measured less removed): alpha-beta component (:data:`OFFSET_COMPONENTS`) -> (value, standard
+    error), V and A, pooled over the records by inverse variance; empty where nothing was measured
+    (a pre-trigger's offsets, no steady tail). What a fitted ``sensor_offset`` is checked against
+    (:meth:`benchmark.problems.timedomain.bench_effects.SensorOffset.contradicted`)."""
+    pooled = {}
+    for rec in ds.startups:
+        removed = rec.removed or {}
+        taken = dict(zip(OFFSET_COMPONENTS, removed.get("sensor_offset", (0.0,) * 4), strict=True))
+        for name, (value, se) in (removed.get(MEASURED) or {}).items():
+            if se > 0 and np.isfinite(value):
+                pooled.setdefault(name, []).append((value - float(taken[name]), se))
+    out = {}
+    for name, rows in pooled.items():
+        w = np.array([1.0 / se**2 for _, se in rows])
+        out[name] = (float(np.sum(w * [v for v, _ in rows]) / np.sum(w)), float(1.0 / np.sqrt(np.sum(w))))
+    return out
 
 
 def restored(ds: StartupDataset, effect: str) -> StartupDataset:

@@ -77,8 +77,8 @@ class StartupRecord:
     messages; None for a record made in memory), removed (what the conditioning removed, to
     put back: ``{"sensor_offset": (v_alpha, v_beta, i_alpha, i_beta) offsets, "current_sensor_saturation":
     mask of the samples masked as flattened, "sensor_offset_at_rest": {phase channel: its
-    pre-trigger samples} where the offsets were their means}``; the diagnosis checks each removal
-    by its rule).
+    pre-trigger samples} where the offsets were their means, "sensor_offset_measured": the steady
+    tail's offsets, removed or not}``; the diagnosis checks each removal by its rule).
     """
 
     t: np.ndarray

@@ -72,14 +72,22 @@ def test_hard_clipped_current_samples_are_masked(tmp_path):
 
 def test_a_clean_synthetic_record_is_left_as_it_is(tmp_path):
     from benchmark.core.harness import load_dataset
-    from benchmark.problems.timedomain.conditioning import condition_dataset
+    from benchmark.problems.timedomain.conditioning import condition_dataset, offsets_left
     from tests.conftest import compose_config
 
     ds, _ = load_dataset(compose_config(["noise=noisy"]))
     out = condition_dataset(ds)
-    assert out.startups[0] is ds.startups[0]  # nothing significant: the very same arrays
+    new, old = out.startups[0], ds.startups[0]
+    for name in ("t", "v_alpha", "v_beta", "i_alpha", "i_beta", "speed"):  # nothing significant: the very same arrays
+        assert getattr(new, name) is getattr(old, name)
     assert any("no significant sensor offset" in line for line in out.conditioning)
     assert out.conditioning_removed == []
+    # what the steady tail measured is kept for the diagnosis (alpha-beta, A; no offset in this record)
+    measured = new.removed["sensor_offset_measured"]
+    assert list(new.removed) == ["sensor_offset_measured"] and set(measured) == {"i_alpha", "i_beta"}
+    assert all(abs(value) < 3 * se and 0 < se < 0.05 for value, se in measured.values()), measured
+    left = offsets_left(out)  # one record, nothing removed: what is left is what was measured
+    assert set(left) == set(measured) and all(left[k] == pytest.approx(measured[k]) for k in left)
 
 
 def test_bench_keys_of_meta_yaml(tmp_path):

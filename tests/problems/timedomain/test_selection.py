@@ -38,7 +38,7 @@ class _Given(Selector):
         self.rule = Rule(share)
         self.held, self.screened, self.refits = held, screened or {}, refits or {}
         self.in_sample = in_sample or {}  # frozenset(names) -> in-sample chi^2 (default: the held-out one)
-        self.fitted, self.memo, self.small, self.negligible_names = [], {}, set(negligible), set()
+        self.fitted, self.memo, self.small, self.refused_names = [], {}, set(negligible), set()
 
     def fit(self, effects, sources, refit=False, progress=None):
         """``refits``: what a drop-one refit from several starts finds where it beats the first fit."""
@@ -80,8 +80,8 @@ class _Given(Selector):
     def with_full_fit(self, sf):
         return sf, None
 
-    def negligible_on_entry(self, sf, name):
-        return name in self.small
+    def refused_on_entry(self, sf, name):
+        return "negligible" if name in self.small else None
 
 
 LOAD, GAIN, SKEW = _Effect("load_torque", 7), _Effect("speed_sensor_gain", 4), _Effect("channel_delay", 1)
@@ -331,7 +331,7 @@ def test_an_effect_negligible_on_all_data_is_dropped_on_entry_and_no_round_is_fi
     sel = _Given(held, negligible={GAIN.name})
     final, _, _, order, pruned, rounds = sel.select([GAIN, LOAD, TWO], _fit(5.0), BAND)
     assert order == ["load_torque"] and pruned == [] and final.chi2 == 2.9
-    assert rounds[0]["negligible"] == "speed_sensor_gain" and rounds[0]["chosen"] is None
+    assert rounds[0]["refused"]["effect"] == "speed_sensor_gain" and rounds[0]["chosen"] is None
     assert rounds[1]["chosen"] == "load_torque" and rounds[1]["from"] == []
     assert not any(GAIN.name in names and len(names) > 1 for names in sel.fitted)  # nothing beside it
 

@@ -35,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from benchmark.core.uncertainty import misfit_ratio
-from benchmark.problems.timedomain.conditioning import AT_REST, restored
+from benchmark.problems.timedomain.conditioning import AT_REST, offsets_left, restored
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, unit_noise
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
@@ -109,7 +109,8 @@ def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
     scales, settings and rule, so that its held-out chi^2 compare with ``sel``'s."""
     data = replace(DiagnosisData.from_dataset(ds), noise=sel.data.noise)
     masks = dict(zip(FOLDS, segment_folds(data), strict=True))
-    other = Selector(data, sel.settings, sel.ctx, sel.centre, sel.fc_scale, masks, sel.rule, sel.order)
+    ctx = replace(sel.ctx, facts={**sel.ctx.facts, "offsets_left": offsets_left(ds)})
+    other = Selector(data, sel.settings, ctx, sel.centre, sel.fc_scale, masks, sel.rule, sel.order)
     other.input_noise = sel.input_noise
     return other
 

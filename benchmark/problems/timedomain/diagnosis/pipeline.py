@@ -39,6 +39,7 @@ import numpy as np
 
 from benchmark.core.effects import Effect
 from benchmark.core.uncertainty import misfit_ratio
+from benchmark.problems.timedomain.conditioning import offsets_left
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.conditioning_check import check_removals, unnamed_line
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel, unit_noise
@@ -146,7 +147,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     runs the rule at several shares this way)."""
     t0 = time.perf_counter()
     data = DiagnosisData.from_dataset(ds)
-    facts = {**ds.facts(), **data.facts(settings.base_case)}
+    facts = {**ds.facts(), **data.facts(settings.base_case), "offsets_left": offsets_left(ds)}
     ctx = base_context(data, base_estimate, ds.dc_link_voltage, ds.nameplate, facts)
     fold_a, fold_b = segment_folds(data)
     masks = {"A": fold_a, "B": fold_b}

@@ -259,9 +259,9 @@ def render_markdown(doc: dict) -> str:
                          f"| {100 * r['in_sample_reduction']:.1f} % | {'yes' if r['earns'] else 'no'} |")
         lines += [f"| {r['effect']} | screened {r['screened_heldout_chi2']:.3f} | | | not fitted (its screening "
                   "removes less than the share; another earns) |" for r in rnd.get("screening", []) if not r["fitted"]]
-        if rnd.get("negligible"):
-            lines += ["", f"`{rnd['negligible']}` earns its place, but fitted on all data its size is negligible "
-                          "(below a tenth of the smallest realistic one): out of the candidates."]
+        if rnd.get("refused"):
+            lines += ["", f"`{rnd['refused']['effect']}` earns its place, but {rnd['refused']['why']}: out of the "
+                          "candidates."]
     lines += ["", "Noise estimated from the data: "
               + "; ".join(f"{k} {v['std']:.3g} (+-{100 * v['rel_uncertainty']:.0f} %, {v['method']})"
                           for k, v in doc["noise"].items()),

@@ -38,7 +38,7 @@ class Screening:
         :meth:`profiled`) and scored on the other fold; the two folds' held-out chi^2 pooled as
         :attr:`SetFit.chi2` pools them. Each candidate's test depends on ``cur``'s fit and the
         candidate alone: kept in ``screened_beside`` (a round that starts from the same fit again,
-        after an effect negligible on entry left, screens only what it has not), with each fold's
+        after an effect refused on entry left, screens only what it has not), with each fold's
         point the test scored (:meth:`screened_points`)."""
         kept = self.screened_beside.setdefault(_fit_key(cur), {})
         todo = [e for e in pool if e.name not in kept]

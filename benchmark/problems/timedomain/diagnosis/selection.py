@@ -31,11 +31,12 @@ on fold A, a Gauss-Newton step scored on fold B); as for the singles, the best s
 one the screening says both may earn are fitted fully, best screened first. Backward, every
 chosen effect must earn its place beside the others (each drop-one model refitted from several
 starts), and its size on all data must reach a
-tenth of its smallest realistic size (:meth:`Selector.negligible`); the least needed effect that
-does not is dropped (``pruned``) and the check repeats; a dropped effect leaves the candidates
-and the forward selection resumes. An effect that states its size is checked for it already on entry
-(:meth:`Selector.negligible_on_entry`): negligible on all data, it leaves the candidates before
-any round is fitted beside it.
+tenth of its smallest realistic size, and where the record measures the effect itself (an
+offset, on the steady tail) the fit must agree with that measurement (:meth:`Selector.refused`);
+the least needed effect that does not is dropped (``pruned``) and the check repeats; a dropped
+effect leaves the candidates and the forward selection resumes. An effect that states its size
+or is measured directly is checked already on entry (:meth:`Selector.refused_on_entry`): refused
+on all data, it leaves the candidates before any round is fitted beside it.
 """
 
 from __future__ import annotations
@@ -70,7 +71,7 @@ class Selector(Screening, Instants):
         self.base_full: np.ndarray | None = None  # the base fitted on all data (set by the pipeline)
         self.input_noise = None  # what the measured voltage's noise adds to each channel (the pipeline's)
         self.removal_fits: dict = {}  # (removal, set) -> selector of the record with it put back (conditioning_check)
-        self.negligible_names: set[str] = set()  # out of this selection: negligible on entry (:meth:`forward`)
+        self.refused_names: set[str] = set()  # out of this selection: refused on entry (:meth:`forward`)
         labels = data.channel_labels()
         used = masks["A"] | masks["B"]
         lab = labels[used]
@@ -250,7 +251,7 @@ class Selector(Screening, Instants):
         cap = self.settings.max_effects
         while True:
             chosen = cur.effects
-            pool = [e for e in candidates if e.name not in cur.names and e.name not in self.negligible_names]
+            pool = [e for e in candidates if e.name not in cur.names and e.name not in self.refused_names]
             if not pool or cur.chi2 <= band**2 or (cap is not None and len(chosen) >= cap):
                 return cur
             trials, screened, refitted = self.round_fits(cur, pool, band, progress)
@@ -263,9 +264,10 @@ class Selector(Screening, Instants):
             if refitted:
                 rnd["refitted_from_screening"] = refitted
             rounds.append(rnd)
-            if best["earns"] and self.negligible_on_entry(trials[best["effect"]], best["effect"]):
-                rnd["negligible"] = best["effect"]  # dropped now, not after the rounds beside it
-                self.negligible_names.add(best["effect"])
+            why = self.refused_on_entry(trials[best["effect"]], best["effect"]) if best["earns"] else None
+            if why:
+                rnd["refused"] = {"effect": best["effect"], "why": why}  # out now, not after the rounds beside it
+                self.refused_names.add(best["effect"])
                 continue
             if best["earns"]:
                 sf = trials[best["effect"]]
@@ -353,34 +355,43 @@ class Selector(Screening, Instants):
                 return names, sf
         return None
 
-    def negligible(self, sf: SetFit, full_x: np.ndarray) -> list[str]:
-        """Names of ``sf``'s effects whose size on all data (``full_x``, :meth:`Effect.fitted_size`)
-        is below :data:`NEGLIGIBLE_SHARE` of the smallest realistic one."""
-        model = sf.model
-        out = []
+    def refused(self, sf: SetFit, full_x: np.ndarray) -> dict[str, str]:
+        """``sf``'s effects the data cannot support whatever share they take, each with why: its
+        size on all data (``full_x``, :meth:`Effect.fitted_size`) below :data:`NEGLIGIBLE_SHARE` of
+        the smallest realistic one, or its parameters fitted on all data excluded by the record's
+        own direct measurement of them (:meth:`Effect.contradicted`: an offset the steady tail measures)."""
+        model, out, se = sf.model, {}, None
         for j, eff in enumerate(model.effects):
-            size = eff.fitted_size(full_x[model.slices[j]], self.ctx)
+            x = full_x[model.slices[j]]
+            size = eff.fitted_size(x, self.ctx)
             if size is not None and size < NEGLIGIBLE_SHARE * float(eff.realistic[0]):
-                out.append(eff.name)
+                out[eff.name] = "fitted on all data its size is negligible (below a tenth of the least realistic)"
+            elif eff.measured_directly(self.ctx):
+                se = model.standard_errors(full_x) if se is None else se
+                why = eff.contradicted(x, se[model.slices[j]], self.ctx)
+                if why:
+                    out[eff.name] = f"fitted on all data {why}"
         return out
 
-    def negligible_on_entry(self, sf: SetFit, name: str) -> bool:
-        """Whether ``name``, about to enter with ``sf``, is negligible on all data (:meth:`negligible`
-        of ``sf`` fitted on all data, as the backward check would find it): checked on entry for
-        effects that state their fitted size, so that no rounds are fitted beside it."""
+    def refused_on_entry(self, sf: SetFit, name: str) -> str | None:
+        """Why ``name``, about to enter with ``sf``, is refused on all data (:meth:`refused` of
+        ``sf`` fitted on all data, as the backward check would find it), or None: checked on entry
+        for effects that state their fitted size or are measured directly, so that no rounds are
+        fitted beside it."""
         j = sf.model.effect_names.index(name)
-        if sf.model.effects[j].fitted_size(sf.xs["A"][sf.model.slices[j]], self.ctx) is None:
-            return False
+        eff = sf.model.effects[j]
+        if eff.fitted_size(sf.xs["A"][sf.model.slices[j]], self.ctx) is None and not eff.measured_directly(self.ctx):
+            return None
         full, x = self.with_full_fit(sf)
-        return name in self.negligible(full, x)
+        return self.refused(full, x).get(name)
 
     def backward(self, cur: SetFit, base_fit: SetFit, band: float, progress=None, full_x=None):
         """The backward check (module docstring): an effect that does not earn its place against
-        the model without it, or whose size on all data (``full_x``, the fit of ``cur``) is
-        negligible (:meth:`negligible`), is dropped. Returns (the set kept, each kept effect's
+        the model without it, or that its fit on all data (``full_x``, the fit of ``cur``)
+        refuses (:meth:`refused`), is dropped. Returns (the set kept, each kept effect's
         drop-one fit by name, names dropped in turn)."""
         pruned = []
-        small = self.negligible(cur, full_x) if full_x is not None else []
+        small = list(self.refused(cur, full_x)) if full_x is not None else []
         while cur.names:
             fits = self.fits([([x for x in cur.effects if x is not e], [(cur, [cur]), (base_fit, [cur])], True)
                               for e in cur.effects], progress)
@@ -399,7 +410,7 @@ class Selector(Screening, Instants):
         the drop-one fits by name, the chosen names in order of selection, names pruned, rounds)."""
         rounds, order, pruned = [], [], []
         cur, pool = base_fit, list(candidates)
-        self.negligible_names = set()
+        self.refused_names = set()
         full_x, withouts, checked = None, {}, None
         while True:
             done = len(rounds)
