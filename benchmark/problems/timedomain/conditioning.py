@@ -262,10 +262,10 @@ def tail_offsets(v: np.ndarray, i: np.ndarray, ts: float, f0: float, weight: np.
         return None
     mask = np.zeros(i.shape, bool)
     mask[:, i.shape[1] - weight.shape[1]:] = ~weight
-    channels = [(v, (None,) * 3, lambda r, s, t: clarke(r, s, t))] if measured_voltage else []
-    channels.append((i, mask, lambda r, s: clarke(r, s, -r - s)))
+    channels = [("v", v, (None,) * 3, clarke)] if measured_voltage else []
+    channels.append(("i", i, mask, lambda r, s: clarke(r, s, -r - s)))  # three wires: i_t = -i_r - i_s
     out = {}
-    for (x, m, to_ab), kind in zip(channels, ("v", "i")[-len(channels):], strict=True):
+    for kind, x, m, to_ab in channels:
         try:
             found = [estimate_offsets(row, ts, None, f0, mask=mk) for row, mk in zip(x, m, strict=True)]
         except (ValueError, np.linalg.LinAlgError):
@@ -281,8 +281,8 @@ def tail_offsets(v: np.ndarray, i: np.ndarray, ts: float, f0: float, weight: np.
 def offsets_left(ds: StartupDataset) -> dict[str, tuple[float, float]]:
     """The offsets the conditioning measured on the records' steady tails and left in ``ds``
     (measured less removed): alpha-beta component (:data:`OFFSET_COMPONENTS`) -> (value, standard
-    error), V and A, pooled over the records by inverse variance; empty where nothing was measured
-    (a pre-trigger's offsets, no steady tail). What a fitted ``sensor_offset`` is checked against
+    error), V and A, pooled over the records by inverse variance; empty where no record has a
+    steady tail. What a fitted ``sensor_offset`` is checked against
     (:meth:`benchmark.problems.timedomain.bench_effects.SensorOffset.contradicted`)."""
     pooled = {}
     for rec in ds.startups:

@@ -365,7 +365,7 @@ class Selector(Screening, Instants):
             x = full_x[model.slices[j]]
             size = eff.fitted_size(x, self.ctx)
             if size is not None and size < NEGLIGIBLE_SHARE * float(eff.realistic[0]):
-                out[eff.name] = "fitted on all data its size is negligible (below a tenth of the least realistic)"
+                out[eff.name] = "fitted on all data its size is negligible (below a tenth of the smallest realistic)"
             elif eff.measured_directly(self.ctx):
                 se = model.standard_errors(full_x) if se is None else se
                 why = eff.contradicted(x, se[model.slices[j]], self.ctx)
@@ -391,17 +391,17 @@ class Selector(Screening, Instants):
         refuses (:meth:`refused`), is dropped. Returns (the set kept, each kept effect's
         drop-one fit by name, names dropped in turn)."""
         pruned = []
-        small = list(self.refused(cur, full_x)) if full_x is not None else []
+        unsupported = list(self.refused(cur, full_x)) if full_x is not None else []
         while cur.names:
             fits = self.fits([([x for x in cur.effects if x is not e], [(cur, [cur]), (base_fit, [cur])], True)
                               for e in cur.effects], progress)
             withouts = {e.name: w for e, w in zip(cur.effects, fits, strict=True)}
-            failing = [n for n, w in withouts.items() if not self.rule.earns_fit(w, cur, band) or n in small]
+            failing = [n for n, w in withouts.items() if not self.rule.earns_fit(w, cur, band) or n in unsupported]
             if not failing:
                 return cur, withouts, pruned
             least = min(failing, key=lambda n: withouts[n].chi2)  # the model does best without it
             pruned.append(least)
-            cur, small = withouts[least], [n for n in small if n != least]
+            cur, unsupported = withouts[least], [n for n in unsupported if n != least]
         return cur, {}, pruned
 
     def select(self, candidates, base_fit: SetFit, band: float, progress=None):
