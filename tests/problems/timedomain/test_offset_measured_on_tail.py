@@ -22,6 +22,7 @@ from benchmark.core.effects import EffectContext, load_effects
 from benchmark.problems.timedomain.conditioning import offsets_left, restored
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.diagnosis.selection import Selector
+from benchmark.problems.timedomain.frames import clarke
 from synthetic.independent import make_dataset, make_spec, write_dataset
 
 OFFSET = load_effects("timedomain", ["sensor_offset"])["sensor_offset"]
@@ -83,25 +84,48 @@ def test_the_selection_refuses_a_contradicted_offset_with_the_reason():
     assert sel.refused(sf, x) == {}
 
 
-@pytest.mark.parametrize("scenario", ["six_step", "pwm"])
-def test_the_tail_measures_what_an_inverter_start_carries_removed_or_put_back(tmp_path, scenario):
-    """An inverter start (no pre-trigger): the conditioning measures the currents' offsets on the
-    steady tail and removes them; what it leaves is zero within the tail's standard error, and
-    with the removal put back it is the injected offset (alpha-beta of the plant's phase
-    offsets). Its switch-state voltages are not measured: no voltage component."""
-    spec = make_spec("simulink_7k5", scenario, ["sensor_offset"], seed=2, duration=1.0, sample_rate=10000,
+def _offset_record(tmp_path, scenario, seed):
+    """A 7.5 kW start of the independent plant with offsets on every channel, loaded (conditioned),
+    and its injected offsets as alpha-beta components (V, A)."""
+    spec = make_spec("simulink_7k5", scenario, ["sensor_offset"], seed=seed, duration=1.0, sample_rate=10000,
                      forms={"sensor_offset": "both"})
-    folder = write_dataset(make_dataset(spec), tmp_path / "set")
-    truth = yaml.safe_load((folder / "truth.yaml").read_text())
+    folder = write_dataset(make_dataset(spec), tmp_path / f"set_{scenario}_{seed}")
+    truth = yaml.safe_load((folder / "truth.yaml").read_text())["effects"][0]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ds = load_startup_dataset(folder)
+    i_r, i_s = truth["current_offsets"]
+    v_alpha, v_beta = clarke(*truth["voltage_offsets"])
+    return ds, {"i_alpha": i_r, "i_beta": (i_r + 2 * i_s) / np.sqrt(3.0), "v_alpha": v_alpha, "v_beta": v_beta}
+
+
+@pytest.mark.parametrize("scenario", ["six_step", "pwm", "dol"])
+def test_the_tail_measures_what_a_start_carries_removed_or_put_back(tmp_path, scenario):
+    """The conditioning measures the offsets on the steady tail and removes them (an inverter
+    start: from the tail; a grid start: from its pre-trigger); what it leaves is zero within the
+    tail's standard errors, and with the removal put back it is the injected offset. An inverter's
+    switch-state voltages are not measured: no voltage component there."""
+    ds, injected = _offset_record(tmp_path, scenario, seed=2)
     assert ds.conditioning_removed == ["sensor_offset"]
-    i_r, i_s = truth["effects"][0]["current_offsets"]
-    injected = {"i_alpha": i_r, "i_beta": (i_r + 2 * i_s) / np.sqrt(3.0)}
     left = offsets_left(ds)
-    assert set(left) == {"i_alpha", "i_beta"}
-    assert all(value == 0.0 and 0 < se < 0.04 for value, se in left.values()), left
+    assert set(left) == ({"i_alpha", "i_beta"} | ({"v_alpha", "v_beta"} if scenario == "dol" else set()))
+    assert all(abs(value) < 3 * se and 0 < se < 0.04 for value, se in left.values()), left
     put_back = offsets_left(restored(ds, "sensor_offset"))
     for name, (value, se) in put_back.items():
         assert abs(value - injected[name]) < max(3 * se, 0.01), (name, value, se, injected[name])
+
+
+def test_the_tails_standard_errors_hold_over_grid_starts(tmp_path):
+    """Eight grid starts with offsets on every channel (seeds 4-11): the tail's measurement (with
+    the removal put back) against the injected offset, in its own standard errors. 32 components:
+    root mean square 1.36, largest 3.03 (seeds 4-15, 48 components: 1.18, one beyond 3): the batch
+    means understate the spread by up to a third on this plant, which the check at 3 combined
+    standard errors leans on (the fit's own standard error is the larger part there). Asserted:
+    not off by a factor of two either way."""
+    z = []
+    for seed in range(4, 12):
+        ds, injected = _offset_record(tmp_path, "dol", seed)
+        left = offsets_left(restored(ds, "sensor_offset"))
+        z += [(value - injected[name]) / se for name, (value, se) in left.items()]
+    z = np.array(z)
+    assert len(z) == 32 and 0.5 < np.sqrt(np.mean(z**2)) < 2.0 and np.max(np.abs(z)) < 4.5, z
