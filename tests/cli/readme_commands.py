@@ -60,9 +60,24 @@ def quick(cmd: str) -> bool:
     return not any(s in cmd for s in SKIP)
 
 
-def run_file(path: Path, seen: set[str], log=print) -> list[str]:
+def printed_tables(path: Path) -> list[dict[str, float]]:
+    """The identification tables a file shows as printed (plain fenced blocks that start with
+    the ``parameter unit`` header), each as parameter -> estimate."""
+    blocks = re.findall(r"```\n(parameter unit.*?)```", path.read_text(encoding="utf-8"), flags=re.S)
+    return [estimates(b) for b in blocks]
+
+
+def estimates(text: str) -> dict[str, float]:
+    """parameter -> estimate of the table printed in ``text`` (its rows after the header)."""
+    header = text.index("parameter unit")
+    rows = re.findall(r"^(Rs|Ls|Le|Rr|J|fv|fc)\s+.+?\s+([-+0-9.e]+)\s+\S+\s+\S+\s+\S+$", text[header:], flags=re.M)
+    return {name: float(value) for name, value in rows}
+
+
+def run_file(path: Path, seen: set[str], log=print, outputs: dict | None = None) -> list[str]:
     """Run the quick commands and API snippets of one file in a fresh temporary folder; returns
-    the failures (file, command, exit status, end of stderr)."""
+    the failures (file, command, exit status, end of stderr). ``outputs``: command -> its
+    standard output, filled in."""
     env = dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND="Agg", NUMBA_NUM_THREADS="1")
     failures = []
     with tempfile.TemporaryDirectory(prefix="imbench-docs-") as tmp:
@@ -76,6 +91,8 @@ def run_file(path: Path, seen: set[str], log=print) -> list[str]:
         for label, argv in jobs:
             seen.add(label)
             proc = subprocess.run(argv, cwd=tmp, env=env, capture_output=True, text=True, timeout=1800)
+            if outputs is not None:
+                outputs[label] = proc.stdout
             log(f"{'ok   ' if proc.returncode == 0 else 'FAIL '} {path.relative_to(REPO)}: {label}")
             if proc.returncode != 0:
                 failures.append(f"{path.relative_to(REPO)}: {label}\n  exit {proc.returncode}: "
@@ -83,14 +100,15 @@ def run_file(path: Path, seen: set[str], log=print) -> list[str]:
     return failures
 
 
-def run_all(log=print) -> list[str]:
-    """Every file's quick commands, two files at a time (each command on one numba thread)."""
+def run_all(log=print, outputs: dict | None = None) -> list[str]:
+    """Every file's quick commands, two files at a time (each command on one numba thread);
+    ``outputs`` (command -> standard output) filled in."""
     seen: set[str] = set()
     files = documents()
     # the README first: the docs repeat some of its commands, which then run once
-    first = run_file(files[0], seen, log)
+    first = run_file(files[0], seen, log, outputs)
     with ThreadPoolExecutor(max_workers=2) as pool:
-        rest = pool.map(lambda f: run_file(f, seen, log), files[1:])
+        rest = pool.map(lambda f: run_file(f, seen, log, outputs), files[1:])
         return first + [f for failures in rest for f in failures]
 
 
