@@ -283,7 +283,7 @@ def offsets_left(ds: StartupDataset) -> dict[str, tuple[float, float]]:
     (measured less removed): alpha-beta component (:data:`OFFSET_COMPONENTS`) -> (value, standard
     error), V and A, pooled over the records by inverse variance; empty where no record has a
     steady tail. What a fitted ``sensor_offset`` is checked against
-    (:meth:`benchmark.problems.timedomain.bench_effects.SensorOffset.contradicted`)."""
+    (:meth:`benchmark.problems.timedomain.offset_effect.SensorOffset.contradicted`)."""
     pooled = {}
     for rec in ds.startups:
         removed = rec.removed or {}

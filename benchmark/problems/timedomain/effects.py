@@ -455,11 +455,11 @@ class InverterDrop(Effect):
 from benchmark.problems.timedomain.bench_effects import (  # noqa: E402  (re-exported)
     ChannelDelay,
     CurrentSensorSaturation,
-    SensorOffset,
     SpeedSensorGain,
     TwoMass,
 )
 from benchmark.problems.timedomain.load_effect import LoadTorque  # noqa: E402  (re-exported)
+from benchmark.problems.timedomain.offset_effect import SensorOffset  # noqa: E402  (re-exported)
 from benchmark.problems.timedomain.temperature_effect import TemperatureDrift  # noqa: E402  (re-exported)
 
 __all__ = ["ChannelDelay", "CoulombFriction", "CurrentSensorSaturation", "DoubleCage", "InverterDrop", "IronLoss",
