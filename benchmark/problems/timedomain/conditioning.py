@@ -156,7 +156,8 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     removed, kept = [], []
     offsets = {name: (value, unit, how, se) for name, value, unit, how, se in report.offsets}
     from_tail = report.switch_on is None or report.switch_on < 50
-    if from_tail and not steady_tail(i, ts, report.f0):
+    steady = steady_tail(i, ts, report.f0)
+    if from_tail and not steady:
         said.append("sensor offsets not estimated: no pre-trigger and the record does not reach a steady state "
                     "(its last supply periods still change)")
         offsets = {name: (0.0, unit, how, se) for name, (value, unit, how, se) in offsets.items()}
@@ -202,7 +203,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
             put_back[AT_REST] = at_rest
     if n_masked:
         put_back["current_sensor_saturation"] = ~weight
-    measured = tail_offsets(v, i, ts, report.f0, cond.weight, measured_voltage)
+    measured = tail_offsets(v, i, ts, report.f0, cond.weight, measured_voltage) if steady else None
     if measured is not None:
         put_back[MEASURED] = measured
     speed_out, speed_offset = rec.speed, 0.0
@@ -256,10 +257,8 @@ def tail_offsets(v: np.ndarray, i: np.ndarray, ts: float, f0: float, weight: np.
     remanence from the inrush is in it too) as alpha-beta components (:data:`OFFSET_COMPONENTS`,
     V and A) -> (value, standard error), the phases' errors taken as independent. ``v`` (3, n),
     ``i`` (2, n) phase channels; ``weight`` (2, m) the currents' kept samples from the end; the
-    voltages only when measured (``measured_voltage``). None when the tail is not steady
-    (:func:`steady_tail`) or too short."""
-    if not steady_tail(i, ts, f0):
-        return None
+    voltages only when measured (``measured_voltage``); the tail must be steady
+    (:func:`steady_tail`, the caller's test). None when it is too short."""
     mask = np.zeros(i.shape, bool)
     mask[:, i.shape[1] - weight.shape[1]:] = ~weight
     channels = [("v", v, (None,) * 3, clarke)] if measured_voltage else []
