@@ -34,7 +34,7 @@ from benchmark.problems.timedomain.extended_tnode import _t_constants, _t_mode, 
 from benchmark.problems.timedomain.kernel_pool import run_split
 from benchmark.problems.timedomain.simulation import substep_voltages
 
-N_STATES = 12
+N_STATES = 13
 #: Length of the stepper's work rows: the states' derivatives, then the stator current (A).
 N_WORK = N_STATES + 2
 SQRT3_2 = math.sqrt(3.0) / 2.0
@@ -69,8 +69,18 @@ def _drop_sign(i, i0):
 
 
 @compiled(_nrt=False, inline="always")
-def _loads(c, t, w_mech):
-    """(passive Coulomb-like load torque, speed-dependent load torque) at time t, N m."""
+def _armature(c):
+    """True when the switched load has a part that follows speed through an armature circuit
+    (``T_s`` on, a speed share and a time constant ``tau_s`` > 0): its lagged speed is a state."""
+    return c[28] != 0.0 and c[41] != 0.0 and c[42] > 0.0
+
+
+@compiled(_nrt=False, inline="always")
+def _loads(c, t, w_mech, w_lag):
+    """(passive Coulomb-like load torque, speed-dependent load torque) at time t, N m.
+    ``w_lag``: the load speed through the armature's first-order lag over ``w_ref`` (the
+    state :func:`_armature` rows carry; a DC generator's current follows its EMF with
+    ``L_a/R_a``), the speed share's drive there."""
     t_pass = c[25]
     t_dyn = 0.0
     if c[26] != 0.0:
@@ -81,7 +91,10 @@ def _loads(c, t, w_mech):
         env = _switched(t, c[29], c[30], c[42], c[43])
         share = c[41]
         t_pass += T_s * env * (1.0 - share)
-        t_dyn += T_s * env * share * w_mech / c[27]
+        if _armature(c):
+            t_dyn += T_s * env * share * w_lag
+        else:
+            t_dyn += T_s * env * share * w_mech / c[27]
     return t_pass, t_dyn
 
 
@@ -235,12 +248,12 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
         t_sh = _coupling_torque(x[9], wm - wl, c[32], c[33], c[37], c[44])
         drive_m = t_m - t_sh - fv * wm
         out[6] = p / J * (drive_m - _resist(direction, drive_m, fc))
-        t_pass, t_dyn = _loads(c, t, wl)
+        t_pass, t_dyn = _loads(c, t, wl, x[12])
         drive_l = t_sh - t_dyn
         out[8] = (drive_l - _resist(dir_l, drive_l, t_pass)) / J_l
         out[9] = wm - wl
     else:
-        t_pass, t_dyn = _loads(c, t, w / p)
+        t_pass, t_dyn = _loads(c, t, w / p, x[12])
         fct = fc + t_pass
         t_d = t_m - t_dyn
         if direction != 0.0:
@@ -253,6 +266,10 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
             out[6] = 0.0
         out[8] = 0.0
         out[9] = 0.0
+    if _armature(c):  # the armature's lag of the load speed (over w_ref)
+        out[12] = ((x[8] if J_l > 0.0 else w / p) / c[27] - x[12]) / c[42]
+    else:
+        out[12] = 0.0
     if h_th > 0.0:
         i1_a = (-w * pm_b - e_a) / R_r1_t
         i1_b = (w * pm_a - e_b) / R_r1_t
@@ -308,7 +325,7 @@ def _stick(c, x, w0, wl0, t, tm):
     fc = c[19]
     two = c[31] > 0.0
     if two:
-        t_pass, t_dyn = _loads(c, t, x[8])
+        t_pass, t_dyn = _loads(c, t, x[8], x[12])
         if fc > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
             ia2, ib2 = _stator_current(c, x, tm)
             t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
@@ -320,7 +337,7 @@ def _stick(c, x, w0, wl0, t, tm):
             if abs(t_sh - t_dyn) <= t_pass:
                 x[8] = 0.0
         return
-    t_pass, t_dyn = _loads(c, t, 0.0)
+    t_pass, t_dyn = _loads(c, t, 0.0, x[12])
     fct = fc + t_pass
     if fct > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
         ia2, ib2 = _stator_current(c, x, tm)

@@ -57,7 +57,7 @@ EXTENDED_FIELDS = (
     "R_r3",  # ohm, rotor loop 3 (a deep bar's third current path); 0 = absent
     "L_sigma3",  # H, leakage of rotor loop 3
     "T_s_speed",  # -, share of the switched load T_s proportional to speed (w/w_ref: a DC generator on a resistor)
-    "tau_s",  # s, first-order rise (and fall) of the switched load (an armature circuit); 0: the t_rise step
+    "tau_s",  # s, first-order rise (and fall) of the switched load and lag of its speed share (an armature); 0: t_rise
     "t_step_off",  # s, instant the switched load is switched off again (at or before t_step: never)
     "k_cubic",  # 1/rad^2, a hardening coupling's cubic term: torque k z (1 + k_cubic z^2) (0: linear spring)
 )

@@ -10,8 +10,9 @@ a fan). Beside the sensor and shaft effects of :mod:`benchmark.problems.timedoma
     (passive, like Coulomb friction), ``quadratic`` (``T (w/w_sync)^2``: fan, pump), ``step``
     (passive constant torque switched on at ``step_fraction`` 0.3-0.7 of the record),
     ``dc_machine`` (a DC generator switched onto a resistor at ``step_fraction``: its torque
-    ``T w/w_sync`` rises with its armature's time constant ``tau``, s, and may be switched off
-    at ``off_fraction``). One augmentation fits all four: extras ``load_const``, ``load_quad``,
+    ``k_e i_a`` follows its armature circuit, ``T u`` with ``u`` the speed over ``w_sync``
+    through the first-order lag of the armature's time constant ``tau``, s, ``L_a/R_a``; on at
+    ``step_fraction``, it may be switched off at ``off_fraction``). One augmentation fits all four: extras ``load_const``, ``load_quad``,
     ``load_step`` (over the torque scale, each within 0-1.5), ``load_step_time`` (fraction of the
     record), ``load_step_speed`` (share of the switched load proportional to speed),
     ``load_step_tau`` (its first-order rise, s, from one sample: abrupt enough to excite a
@@ -43,7 +44,8 @@ class LoadTorque(Effect):
     extra_units = ("p.u. of torque scale", "p.u. of torque scale at w_sync", "p.u. of torque scale",
                    "fraction of record", "fraction of switched load", "s", "fraction of record")
     physics = ("a load torque: constant, ~speed^2, or switched on (and off) at unknown instants through a "
-               "first-order rise, in part proportional to speed (a DC machine's armature circuit)")
+               "first-order rise, in part proportional to speed through the same lag (a DC machine's armature "
+               "circuit)")
     shows_in = "steady slip and current rise over a window; a speed dip"
     FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]},
                   {"kind": "dc_machine", "step_fraction": [0.3, 0.6], "tau": [0.01, 0.06]}]

@@ -286,8 +286,8 @@ class JointModel:
         """The free coast of the rows, ``J dw/dt = -(A + B w + C w^2)`` with ``A`` Coulomb friction
         plus the passive load torques (constant, and the switched load's constant part as it
         stands at the start-up's end, :func:`switched_at_end`), ``B = fv`` plus the switched
-        load's part that follows speed (a DC generator still on its resistor), ``C`` a fan load
-        over ``w_ref^2``."""
+        load's part that follows speed (a DC generator still on its resistor, through its armature's
+        lag ``tau_s``), ``C`` a fan load over ``w_ref^2``."""
         d = self.data
         theta = self.full_parameters(X)
         J, fv = theta[:, 4:5], theta[:, 5:6]
@@ -296,10 +296,11 @@ class JointModel:
         fc = np.where(np.isfinite(col["fc"]), col["fc"], theta[:, 6:7])  # an effect may set fc
         step_on = switched_at_end(col, float(d.t[-1]))
         A = fc + col["T_L"] + col["T_s"] * step_on * (1.0 - col["T_s_speed"])
-        fv = fv + col["T_s"] * step_on * col["T_s_speed"] / col["w_ref"]  # a switched load that follows speed
+        B_a = col["T_s"] * step_on * col["T_s_speed"] / col["w_ref"]  # a switched load that follows speed
+        fv = fv + B_a
         with np.errstate(all="ignore"):
             C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
-        return FreeCoast(d.stop_t, J, fv, A, C)
+        return FreeCoast(d.stop_t, J, fv, A, C, B_a, col["tau_s"])  # its armature's lag (tau_s > 0)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
         return self.residuals_of(self.simulate(X), overwrite=True)

@@ -6,6 +6,13 @@ load's coefficient (N m s^2/rad^2). Its speed has a closed form: an exponential 
 with a fan load a tangent (or hyperbolic tangent) of time; the shaft stays at rest once
 stopped (passive torques hold it).
 
+A DC generator still on its resistor brakes the coast through its armature circuit: its torque
+``g`` follows ``B_a w`` with the armature's time constant ``tau_a`` (``tau_a g' = B_a w - g``,
+``B_a`` its part of ``B``). Without a fan load the coast is then linear in ``(w, g)`` and its
+speed is the sum of two exponentials of the system's eigenvalues (complex where the armature's
+"electrical spring" and the inertia oscillate), from ``g = B_a w`` at the coast's start (the
+record ends in a steady state). With a fan load as well the lag is left out.
+
 The profiled start of the coast (:meth:`benchmark.problems.timedomain.diagnosis.fit.JointModel.recorded_stop`)
 evaluates the coast of the same rows from three starting speeds; :class:`FreeCoast` computes
 what does not depend on the start (the decay ``exp(-t/tau)`` over the whole record, the
@@ -22,15 +29,24 @@ import numpy as np
 
 class FreeCoast:
     """The coast of ``n`` rows at times ``t`` (N,) s from the supply's removal: ``J``, ``fv``,
-    ``A`` and ``C`` are (n, 1) columns (kg m^2, N m s/rad, N m, N m s^2/rad^2)."""
+    ``A`` and ``C`` are (n, 1) columns (kg m^2, N m s/rad, N m, N m s^2/rad^2); ``B_a`` (n, 1),
+    N m s/rad, the part of ``fv`` that acts through an armature circuit of time constant
+    ``tau_a`` (n, 1), s (None or 0: none)."""
 
-    def __init__(self, t: np.ndarray, J: np.ndarray, fv: np.ndarray, A: np.ndarray, C: np.ndarray):
+    def __init__(self, t: np.ndarray, J: np.ndarray, fv: np.ndarray, A: np.ndarray, C: np.ndarray,
+                 B_a: np.ndarray | None = None, tau_a: np.ndarray | None = None):
         self.t = np.asarray(t, float)[None, :]
         with np.errstate(all="ignore"):
             self.tau = J / fv
             self.c = A / J
             self.decay = np.exp(-self.t / self.tau)
         self.fan = C[:, 0] > 1e-15  # the complex closed form only where a fan load makes it quadratic
+        self.armature = np.zeros(len(J), bool)
+        if B_a is not None and tau_a is not None:
+            self.armature = (B_a[:, 0] > 0) & (tau_a[:, 0] > 0) & ~self.fan
+        if np.any(self.armature):
+            m = self.armature
+            self.lagged = _LaggedCoast(self.t, J[m], fv[m] - B_a[m], B_a[m], tau_a[m], A[m])
         if np.any(self.fan):
             self.fan_terms = (A[self.fan], C[self.fan], J[self.fan], fv[self.fan])
             with np.errstate(all="ignore"):
@@ -50,7 +66,36 @@ class FreeCoast:
                 w0f, q = w0[self.fan], self.q
                 phi0 = np.arctan((2 * Cf * w0f + fvf) / q)
                 w[self.fan] = np.real((-fvf + q * np.tan(phi0 - self.turn)) / (2 * Cf))
+            if np.any(self.armature):
+                w[self.armature] = self.lagged.speed(w0[self.armature])
         return at_rest_once_stopped(w)
+
+
+class _LaggedCoast:
+    """The coast ``J w' = -A - fv w - g``, ``tau_a g' = B_a w - g`` of rows (each an (m, 1)
+    column) from ``(w0, B_a w0)``: ``w = w* + c1 exp(l1 t) + c2 exp(l2 t)``, ``l1, l2`` the
+    eigenvalues of the system's matrix, ``w* = -A/(fv + B_a)`` its rest point."""
+
+    def __init__(self, t, J, fv, B_a, tau_a, A):
+        with np.errstate(all="ignore"):
+            m11, m12, m21, m22 = -fv / J, -1.0 / J, B_a / tau_a, -1.0 / tau_a
+            half = 0.5 * (m11 + m22)
+            det = m11 * m22 - m12 * m21
+            root = np.sqrt((half * half - det).astype(complex))
+            root = np.where(np.abs(root) > 1e-9 * np.abs(half), root, 1e-9 * np.abs(half))  # a double root
+            self.l1, self.l2 = half + root, half - root
+            self.w_rest = -A / (fv + B_a)
+            self.m11, self.m12, self.B_a = m11, m12, B_a
+            self.e1, self.e2 = np.exp(self.l1 * t), np.exp(self.l2 * t)
+
+    def speed(self, w0):
+        with np.errstate(all="ignore"):
+            d_w = w0 - self.w_rest
+            d_g = self.B_a * d_w  # g starts at B_a w0, its rest point is B_a w*
+            slope = self.m11 * d_w + self.m12 * d_g
+            c1 = (slope - self.l2 * d_w) / (self.l1 - self.l2)
+            c2 = d_w - c1
+            return np.real(self.w_rest + c1 * self.e1 + c2 * self.e2)
 
 
 def at_rest_once_stopped(w: np.ndarray) -> np.ndarray:
