@@ -12,9 +12,10 @@ a fan). Beside the sensor and shaft effects of :mod:`benchmark.problems.timedoma
     ``dc_machine`` (a DC generator switched onto a resistor at ``step_fraction``: its torque
     ``k_e i_a`` follows its armature circuit, ``T u`` with ``u`` the speed over ``w_sync``
     through the first-order lag of the armature's time constant ``tau``, s, ``L_a/R_a``; on at
-    ``step_fraction``, it may be switched off at ``off_fraction``). One augmentation fits all four: extras ``load_const``, ``load_quad``,
-    ``load_step`` (over the torque scale, each within 0-1.5), ``load_step_time`` (fraction of the
-    record), ``load_step_speed`` (share of the switched load proportional to speed),
+    ``step_fraction``, it may be switched off at ``off_fraction``). One augmentation fits all
+    four: extras ``load_const``, ``load_quad``, ``load_step`` (over the torque scale, each
+    within 0-1.5), ``load_step_time`` (fraction of the record), ``load_step_speed`` (share of
+    the switched load proportional to speed),
     ``load_step_tau`` (its first-order rise, s, from one sample: abrupt enough to excite a
     coupling resonance as a real step does, smooth enough for its instant to be fitted between
     samples) and ``load_step_off`` (its switch-off, fraction of the record; never when at or
