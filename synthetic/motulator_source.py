@@ -29,8 +29,8 @@ friction coefficient ``B_L(|w|) = fv + fc/max(|w|, eps)`` (``eps`` = :data:`COUL
 Held-out forms (for scoring only, :mod:`synthetic.motulator_effects`; option ``form``):
 ``main_saturation`` ``steel_gap`` (gap plus M800-50A iron), ``two_mass`` ``slip_clutch``
 (a torque limiter slipping in series with the coupling; ``elastomer``, a progressive coupling, is retired
-from them), ``load_torque`` ``dc_generator`` (a DC generator with its armature
-circuit as an extra state).
+from them), ``load_torque`` ``eddy_brake`` (an eddy-current brake with its excitation's rise; ``dc_generator``,
+a DC generator with its armature circuit as an extra state, is retired from them).
 """
 
 from __future__ import annotations
@@ -310,9 +310,12 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
         with ``hardening``), ``load_torque`` (``form``: ``step``, an
         active torque from ``time`` s; ``constant``, a passive motion-opposing torque from the
         start; ``quadratic``, ``k*w**2`` reaching ``torque`` at synchronous speed; held out,
-        ``dc_generator`` closed at ``time`` s with ``emf`` V at synchronous speed,
-        ``armature_time_constant`` s and ``brush_drop`` V, ``torque`` its steady torque at
-        synchronous speed; ``torque`` N m or ``size`` fraction of rated torque, default 0.5).
+        ``eddy_brake`` excited at ``time`` s, ``critical_speed_ratio`` (its critical speed over
+        synchronous speed) and ``field_time_constant`` s, ``torque`` its steady torque at
+        synchronous speed; retired, ``dc_generator`` closed at ``time`` s with ``emf`` V at
+        synchronous speed, ``armature_time_constant`` s and ``brush_drop`` V, ``torque`` its
+        steady torque at synchronous speed; ``torque`` N m or ``size`` fraction of rated torque,
+        default 0.5).
     noise : dict or None
         ``current_std`` (A, white), ``current_colored_std`` (A) with
         ``current_colored_bandwidth`` (Hz, first-order, default 50), ``voltage_std`` (V), ``speed_std``
@@ -390,6 +393,9 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
         if "load_torque" in eff and eff["load_torque"]["form"]["form"] == "dc_generator":
             g = eff["load_torque"]["form"]["generator"]
             coast["fv"] += g["k_e"] ** 2 / g["R_a"]  # the generator brakes like a viscous torque
+        if "load_torque" in eff and eff["load_torque"]["form"]["form"] == "eddy_brake":
+            b = eff["load_torque"]["form"]["brake"]
+            coast["fv"] += 2 * b["T_k"] / b["w_k"]  # the brake at low speed: its slope there, fully excited
         ns = int(round(_coast_time(coast, abs(w0), stop_max_duration) / Tq)) + 1
         mech_state = {k: getattr(mech.data, k)[-1] for k in vars(mech.sol_states)}
         mech2 = mechanics(mt, m, eff, exc, stop_at=duration)

@@ -36,10 +36,13 @@ per sample); held-out forms marked (h):
   on-resistance 1-3 V at ``I_n``, body diode 0.7-1.2 V; (h) ``mosfet_capacitive``: on-resistance
   1-3 V at ``I_n`` and a capacitive dead-time transition, transition current 3-15 % of
   ``I_n``): size = device drop at ``I_n``, V; dead time 1-4 us. Inverter scenarios only.
-* ``load_torque`` (``constant``, ``quadratic``, ``step`` at 30-70 % of the record; (h)
-  ``dc_generator``: armature time constant 2-20 ms, EMF 100-250 V at synchronous speed, brush
-  drop 1-2 V, armature closed at the start or at 30-70 % of the record): size = ``T_L/T_n``
-  (the generator's: its steady torque at synchronous speed), 0.1-1.0.
+* ``load_torque`` (``constant``, ``quadratic``, ``step`` at 30-70 % of the record;
+  ``dc_generator`` (retired from the held-out forms): armature time constant 2-20 ms, EMF
+  100-250 V at synchronous speed, brush drop 1-2 V, armature closed at the start or at 30-70 %
+  of the record; (h) ``eddy_brake``: an eddy-current brake, critical speed 0.2-2 x synchronous
+  (log-uniform), field time constant 20-200 ms (log-uniform), excited at the start or at
+  30-70 % of the record): size = ``T_L/T_n`` (the generator's and the brake's: their steady
+  torque at synchronous speed), 0.1-1.0.
 * ``two_mass`` (``spring``, ``backlash`` of 0.1-0.5 deg; ``elastomer`` (retired from the
   held-out forms): stiffness 1.5-3 x harder at rated torque; (h) ``slip_clutch``: a
   friction torque limiter in series with the spring, slipping at 0.7-1.8 x the rated torque (set to
@@ -294,6 +297,10 @@ class LoadTorque(Effect):
             spec.update(step_fraction=0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.7)),
                         armature_time_constant=log_uniform(rng, 2e-3, 2e-2), emf=float(rng.uniform(100.0, 250.0)),
                         brush_drop=float(rng.uniform(1.0, 2.0)))
+        if form == "eddy_brake":
+            spec.update(step_fraction=0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.7)),
+                        critical_speed_ratio=log_uniform(rng, 0.2, 2.0),
+                        field_time_constant=log_uniform(rng, 0.02, 0.2))
         return spec
 
     def _apply(self, build, spec):
@@ -301,7 +308,7 @@ class LoadTorque(Effect):
         t_step = float(spec.get("step_fraction", 0.0)) * build.duration + getattr(build.scenario, "pre_trigger", 0.0)
         TL = spec["size"] * mo.rated_torque
         mech = replace(build.plant["mechanics"], load=spec["form"], load_torque=TL, w_ref=mo.w_sync, t_step=t_step)
-        out = {"load_torque": TL, "t_step": t_step if spec["form"] in ("step", "dc_generator") else None}
+        out = {"load_torque": TL, "t_step": t_step if spec["form"] in ("step", "dc_generator", "eddy_brake") else None}
         if spec["form"] == "dc_generator":
             # EMF ``emf`` at synchronous speed; the circuit resistance gives TL there (brush drop aside)
             ke = spec["emf"] / mo.w_sync
@@ -309,6 +316,13 @@ class LoadTorque(Effect):
             mech = replace(mech, generator=(ke, R, spec["armature_time_constant"] * R, spec["brush_drop"],
                                             0.01 * TL / ke))
             out.update(emf_constant=ke, armature_resistance=R, armature_inductance=spec["armature_time_constant"] * R)
+        if spec["form"] == "eddy_brake":
+            # the critical speed w_k a ratio of synchronous speed; T_k so that the steady torque at w_sync is TL
+            w_k = spec["critical_speed_ratio"] * mo.w_sync
+            q = mo.w_sync / w_k
+            T_k = TL * (1.0 + q * q) / (2.0 * q)
+            mech = replace(mech, brake=(T_k, w_k, spec["field_time_constant"]))
+            out.update(peak_torque=T_k, critical_speed=w_k)
         build.plant["mechanics"] = mech
         return out
 

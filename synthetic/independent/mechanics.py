@@ -23,7 +23,13 @@ motion and acts like Coulomb friction), ``quadratic`` ``T_L (w/w_ref)^2`` (fan, 
 ``t_step``; torque ``k_e i_a`` with ``L_a di_a/dt = k_e w - R_a i_a - U_b tanh(i_a/i_b)``
 (EMF, circuit resistance, brush drop; e.g. Fitzgerald, Kingsley, Umans, Electric Machinery,
 ch. 7). At standstill (no EMF) it gives no torque; after the switch its torque rises with
-the armature time constant ``L_a/R_a`` towards ``k_e^2 w/R_a``.
+the armature time constant ``L_a/R_a`` towards ``k_e^2 w/R_a``. Retired from the held-out forms
+(the diagnosis's DC machine has the armature's lag since); held out in its place,
+``eddy_brake``: an eddy-current brake (a test bench's dynamometer), its excitation switched on
+at ``t_step``, ``T = T_k (i_f/I_f)^2 2 (w/w_k)/(1 + (w/w_k)^2)``: the torque-speed law of an
+eddy-current brake with a critical speed ``w_k`` where its torque peaks at ``T_k`` (Wouterse,
+IEE Proc. B 138(4), 1991), times the square of the excitation current, which rises with the
+field winding's time constant ``tau_f`` (``i_f/I_f = 1 - exp(-(t - t_step)/tau_f)``).
 
 Two-mass coupling torque ``T_sh = k dz(twist) + c (w_m - w_l)`` with ``dz`` a dead zone of
 half-width ``backlash`` (rad; 0 = linear spring); no damping torque in the free play.
@@ -48,9 +54,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-LOADS = ("none", "constant", "quadratic", "step", "dc_generator")
+LOADS = ("none", "constant", "quadratic", "step", "dc_generator", "eddy_brake")
 (M_JM, M_JL, M_FV, M_FC, M_K, M_C, M_BL, M_TWO, M_LOAD, M_TL, M_WREF, M_TSTEP, M_FS, M_WS, M_KE, M_RA, M_LA, M_UB,
- M_IB, M_ZR, M_PG, M_TS) = range(22)
+ M_IB, M_ZR, M_PG, M_TS, M_BK, M_BW, M_BF) = range(25)
 N_MECH = 5  # states: w_m, w_l, twist, theta, i_a
 
 
@@ -74,6 +80,8 @@ class Mechanics:
     generator : DC generator ``(k_e V s/rad, R_a ohm, L_a H, U_b V, i_b A)`` (load ``dc_generator``).
     twist_ref : elastomer hardening twist ``z_r``, rad (0: linear spring).
     slip_torque : torque ``T_lim`` at which a slip hub in series with the spring slips, N m (0: none).
+    brake : eddy-current brake ``(T_k N m, w_k rad/s, tau_f s)``: peak torque, critical speed,
+        field time constant (load ``eddy_brake``).
     """
 
     J_load: float = 0.0
@@ -90,6 +98,7 @@ class Mechanics:
     generator: tuple = (0.0, 1.0, 1.0, 0.0, 1.0)
     twist_ref: float = 0.0
     slip_torque: float = 0.0
+    brake: tuple = (0.0, 1.0, 1.0)
 
     def __post_init__(self):
         if self.load not in LOADS:
@@ -108,7 +117,7 @@ class Mechanics:
         return math.sqrt(self.stiffness * (1 / J_motor + 1 / self.J_load)) / (2 * math.pi)
 
     def pack(self, J: float, fv: float, fc: float) -> np.ndarray:
-        out = np.zeros(22)
+        out = np.zeros(25)
         out[M_JM], out[M_JL], out[M_FV], out[M_FC] = J, self.J_load, fv, fc
         out[M_K], out[M_C], out[M_BL], out[M_TWO] = self.stiffness, self.damping, self.backlash, float(self.two_mass)
         out[M_LOAD], out[M_TL] = LOADS.index(self.load), self.load_torque
@@ -117,6 +126,7 @@ class Mechanics:
         out[M_KE:M_IB + 1] = self.generator
         out[M_ZR] = self.twist_ref
         out[M_TS] = self.slip_torque
+        out[M_BK:M_BF + 1] = self.brake
         return out
 
     def armature_time_constant(self) -> float:
@@ -201,6 +211,10 @@ def _loads(t, w, mech):
         return 0.0, mech[M_TL] * q * abs(q)
     if code == 3 and t >= mech[M_TSTEP]:
         return mech[M_TL], 0.0
+    if code == 5 and t >= mech[M_TSTEP]:  # eddy-current brake: its law times the excitation squared
+        field = 1.0 - math.exp(-(t - mech[M_TSTEP]) / mech[M_BF])
+        q = w / mech[M_BW]
+        return 0.0, mech[M_BK] * field * field * 2.0 * q / (1.0 + q * q)
     return 0.0, 0.0
 
 

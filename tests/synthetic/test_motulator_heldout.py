@@ -1,7 +1,8 @@
 """Held-out forms of the motulator source: the split, the draws, the curves and the records.
 
 motulator injects three effects; their held-out forms (gap plus M800-50A magnetising curve,
-slip clutch, DC generator load; the retired elastomer coupling is drawn by name only) are built
+slip clutch, eddy-current brake; the retired elastomer coupling and DC generator load are drawn by
+name only) are built
 on motulator's own classes (``synthetic/motulator_effects.py``). Records: a 2-pole 1 kW motor,
 0.08 s at 5 kHz, noise-free.
 """
@@ -19,7 +20,8 @@ SMALL = {"name": "small_2pole", "pole_pairs": 1, "voltage": 230.0, "frequency": 
          "rated_power": 1000.0}
 HELD = {"main_saturation": {"form": "steel_gap", "size": 0.3, "iron_ratio": 250.0},
         "two_mass": {"form": "slip_clutch", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1, "slip_share": 0.8},
-        "load_torque": {"form": "dc_generator", "size": 0.5, "time": 0.04, "armature_time_constant": 0.01}}
+        "load_torque": {"form": "eddy_brake", "size": 0.5, "time": 0.04, "critical_speed_ratio": 0.5,
+                        "field_time_constant": 0.01}}
 
 
 def _csv(path):
@@ -66,10 +68,12 @@ def records(tmp_path_factory):
     out = {}
     retired = {"elastomer": {"two_mass": {"form": "elastomer", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1,
                                           "hardening": 2.5}},
-               "spring": {"two_mass": {"size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1}}}
+               "spring": {"two_mass": {"size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1}},
+               "dc_generator": {"load_torque": {"form": "dc_generator", "size": 0.5, "time": 0.04,
+                                                "armature_time_constant": 0.01}}}
     for name, effects in {"none": None, **{k: {k: v} for k, v in HELD.items()}, **retired}.items():
         folder = tmp_path_factory.mktemp(name)
-        stop = name in ("none", "load_torque")
+        stop = name in ("none", "load_torque", "dc_generator")
         truth = make_motulator_dataset(SMALL, "dol", effects, None, 0, folder, duration=0.08, sample_rate=5000,
                                        stop=stop, stop_max_duration=0.3)
         out[name] = (_csv(folder / "startup.csv"), _csv(folder / "stop.csv") if stop else None, truth)
@@ -87,8 +91,23 @@ def test_each_heldout_form_changes_motulators_record(records):
         assert di > 0.05 or dw > 0.5, (name, di, dw)  # > 5 x the blind draws' smallest noise
 
 
-def test_dc_generator_load_is_silent_until_switched_and_then_brakes(records):
+def test_eddy_brake_is_silent_until_excited_and_then_brakes_by_its_law(records):
     (base, base_stop, _), (rec, stop, truth) = records["none"], records["load_torque"]
+    b = truth["effects"][0]["form"]["brake"]
+    before = rec["t"] < b["time"]
+    np.testing.assert_allclose(rec["speed"][before], base["speed"][before], rtol=0, atol=1e-3)
+    assert rec["speed"][-1] < base["speed"][-1] - 1.0
+    w_sync = 2 * np.pi * 50
+    q = w_sync / b["w_k"]
+    assert b["w_k"] == pytest.approx(0.5 * w_sync) and b["tau_f"] == 0.01
+    assert b["T_k"] * 2 * q / (1 + q * q) == pytest.approx(0.5 * 1000.0 / (0.97 * w_sync))  # its size
+    k = min(len(stop["speed"]), len(base_stop["speed"])) - 1
+    assert stop["speed"][k] < base_stop["speed"][k] - 20.0  # it keeps braking in the free stop
+
+
+def test_dc_generator_load_is_silent_until_switched_and_then_brakes(records):
+    """The retired DC generator form, drawn by name."""
+    (base, base_stop, _), (rec, stop, truth) = records["none"], records["dc_generator"]
     g = truth["effects"][0]["form"]["generator"]
     before = rec["t"] < g["time"]
     np.testing.assert_allclose(rec["speed"][before], base["speed"][before], rtol=0, atol=1e-3)
