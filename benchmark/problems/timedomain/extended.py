@@ -367,6 +367,8 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
     hs = h / substeps
     p = c[20]
     two = c[31] > 0.0
+    ns = N_STATES if _armature(c) else N_STATES - 1  # the armature's state only where it moves
+    xt[N_STATES - 1] = x[N_STATES - 1]
     for k in range(n):
         # without a stator-side iron loss the recorded current is the stator branch current at
         # x, which the step's first derivative computes (the same operations): taken from there
@@ -394,20 +396,20 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
             if j == 0 and not own:
                 out[0, k] = k1[N_STATES]
                 out[1, k] = k1[N_STATES + 1]
-            for s in range(N_STATES):
+            for s in range(ns):
                 xt[s] = x[s] + 0.5 * hs * k1[s]
             _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2, tm)
-            for s in range(N_STATES):
+            for s in range(ns):
                 xt[s] = x[s] + 0.5 * hs * k2[s]
             _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3, tm)
-            for s in range(N_STATES):
+            for s in range(ns):
                 xt[s] = x[s] + hs * k3[s]
             _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4, tm)
-            for s in range(N_STATES):
+            for s in range(ns):
                 x[s] = x[s] + hs / 6.0 * (k1[s] + 2.0 * (k2[s] + k3[s]) + k4[s])
             _stick(c, x, w0, wl0, ts + hs, tm)
         m = 0.0
-        for s in range(N_STATES):
+        for s in range(ns):
             m = max(m, abs(x[s]))
         if not m < 1e9:
             for kk in range(k + 1, n):
