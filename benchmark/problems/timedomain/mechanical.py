@@ -23,6 +23,10 @@ from scipy import integrate, optimize
 from benchmark.core.errors import DataError
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 
+#: Smallest ``1/tau_m`` (1/s) of the free-stop fit: a mechanical time constant of at most 1e9 s
+#: (viscous friction of zero to the fit's resolution; it cannot be negative).
+MIN_INV_TAU = 1e-9
+
 
 @dataclass(frozen=True)
 class MechanicalEstimate:
@@ -85,6 +89,13 @@ def fit_free_stop(t: np.ndarray, speed: np.ndarray, case: int = 2, filter_speed:
         return (w0_ + a) * np.exp(-tt * inv_tau_) - a - ww
 
     sol = optimize.least_squares(residual, [w0, inv_tau, c], x_scale=np.abs([w0, inv_tau, c]) + 1e-12)
+    if sol.x[1] < MIN_INV_TAU or sol.x[2] < 0.0:
+        # friction cannot drive the shaft: a coast that brakes harder as it slows (an eddy-current
+        # brake left excited: viscous at low speed, falling above its critical speed) fits a negative
+        # viscous term; fitted again within the physics (fv, fc >= 0), the coast model then misses it
+        x0 = [sol.x[0], max(sol.x[1], 1.0 / max(tt[-1], 1e-9)), max(sol.x[2], 0.0)]
+        sol = optimize.least_squares(residual, x0, x_scale=np.abs(x0) + 1e-12,
+                                     bounds=([-np.inf, MIN_INV_TAU, 0.0], [np.inf, np.inf, np.inf]))
     w0, inv_tau, c = sol.x
     return MechanicalEstimate(tau_m=float(1.0 / inv_tau), fc_over_J=float(max(c, 0.0)), w0=float(w0),
                               t_free=float(t[k0]), case=2)

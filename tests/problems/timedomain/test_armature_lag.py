@@ -127,3 +127,4 @@ def test_the_free_coast_with_a_generator_on_is_the_linear_systems_closed_form():
                             np.zeros((1, 1))).speed(np.array([[w0]]))[0]
     exponential = FreeCoast(t, J[1:2], fv[1:2] + B_a[1:2], A[1:2], np.zeros((1, 1))).speed(np.array([[w0]]))[0]
     assert np.max(np.abs(w[1] - first_order)) < 0.1 * np.max(np.abs(w[1] - exponential))
+
