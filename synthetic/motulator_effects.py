@@ -252,13 +252,12 @@ def effect_specs(effects: dict | None, m: dict, exc: dict, duration: float) -> l
                     raise ValueError("load_torque: give torque (N m), or the motor's rated_torque or rated_power")
                 torque = float(opts.get("size", 0.5)) * m["rated_torque"]
             form = {"form": kind, "torque": float(torque), "time": float(opts.get("time", 0.6 * duration))}
+            w_sync = 2 * np.pi * exc["f"] / m["p"]
             if kind == "dc_generator":
-                w_sync = 2 * np.pi * exc["f"] / m["p"]
                 form["generator"] = generator(float(torque), w_sync, float(opts.get("emf", 200.0)),
                                               float(opts.get("armature_time_constant", 0.01)),
                                               float(opts.get("brush_drop", 1.5)), form["time"])
             if kind == "eddy_brake":
-                w_sync = 2 * np.pi * exc["f"] / m["p"]
                 form["brake"] = brake(float(torque), w_sync, float(opts.get("critical_speed_ratio", 0.6)),
                                       float(opts.get("field_time_constant", 0.05)), form["time"])
             size_name = ("steady generator torque at synchronous speed" if kind == "dc_generator"

@@ -293,13 +293,13 @@ class LoadTorque(Effect):
         spec = {"size": float(rng.uniform(0.1, 1.0))}
         if form == "step":
             spec["step_fraction"] = float(rng.uniform(0.3, 0.7))
+        if form in ("dc_generator", "eddy_brake"):  # switched on at the start or later, with equal odds
+            spec["step_fraction"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.7))
         if form == "dc_generator":
-            spec.update(step_fraction=0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.7)),
-                        armature_time_constant=log_uniform(rng, 2e-3, 2e-2), emf=float(rng.uniform(100.0, 250.0)),
+            spec.update(armature_time_constant=log_uniform(rng, 2e-3, 2e-2), emf=float(rng.uniform(100.0, 250.0)),
                         brush_drop=float(rng.uniform(1.0, 2.0)))
         if form == "eddy_brake":
-            spec.update(step_fraction=0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.7)),
-                        critical_speed_ratio=log_uniform(rng, 0.2, 2.0),
+            spec.update(critical_speed_ratio=log_uniform(rng, 0.2, 2.0),
                         field_time_constant=log_uniform(rng, 0.02, 0.2))
         return spec
 
