@@ -241,6 +241,8 @@ def test_diagnosis_never_opens_truth_files(tmp_path):
                               "diagnosis.max_iterations=4", "figures=false"], name="diagnose")
         doc = run_diagnosis(cfg, Path("{tmp_path / 'out'}"))
         print("VERDICT", doc["verdict"])
+        print("FITS", doc["fits"]["stopped_at_cap"], doc["fits"]["to_convergence"], doc["fits"]["cap"])
+        print("WARNED", "**Not converged:**" in Path("{tmp_path / 'out'}", "diagnosis.md").read_text())
         print("OPENED_TRUTH", [p for p in opened if "truth" in Path(p).name])
         print("OPENED_DATA", any(p.endswith("startup.csv") for p in opened))
     """)
@@ -249,6 +251,24 @@ def test_diagnosis_never_opens_truth_files(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "OPENED_TRUTH []" in proc.stdout
     assert "OPENED_DATA True" in proc.stdout  # the hook does see the files the diagnosis reads
+    # a cap of 4 evaluations stops the fits meant to converge: the document counts them, the report says so
+    at_cap, fits, cap = (int(v) for v in proc.stdout.split("FITS ")[1].split()[:3])
+    assert cap == 4 and fits >= 3 and 1 <= at_cap <= fits, proc.stdout  # 7 of 9 when written
+    assert "WARNED True" in proc.stdout
+
+
+def test_fits_that_stop_at_their_cap_are_counted_per_cap_and_reported():
+    from benchmark.problems.timedomain.diagnosis.fit import FitTally
+    from benchmark.problems.timedomain.diagnosis.pipeline import fits_ended
+    from benchmark.problems.timedomain.diagnosis.run import capped_fit_lines
+
+    tally = FitTally()
+    for cap, at_cap in ((6, True), (6, True), (200, False), (200, True), (200, False)):
+        tally.record(cap, at_cap)
+    ended = fits_ended(tally, 200)
+    assert ended == {"cap": 200, "to_convergence": 3, "stopped_at_cap": 1, "by_cap": {"6": [2, 2], "200": [3, 1]}}
+    assert "1 of 3 local fits stopped at the safety cap of 200" in capped_fit_lines(ended)[0]
+    assert capped_fit_lines(fits_ended(FitTally(), 200)) == []  # nothing said when every fit converged
 
 
 def test_misfit_band_is_the_fit_quality_band():

@@ -14,6 +14,7 @@ batched through the kernel), in coordinates normalised to their bounds.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -37,6 +38,23 @@ CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
 DIVERGED = 1e6
 
 
+class FitTally:
+    """How the local fits of one record ended, per evaluation cap: ``{cap: [fits, stopped at
+    the cap]}`` (a fit stopped at its cap did not converge; safe to use from several threads).
+    The diagnosis reports the fits run to convergence (``diagnosis.max_iterations``) that did
+    not: a verdict may hang on where they stopped."""
+
+    def __init__(self):
+        self.by_cap: dict[int, list[int]] = {}
+        self._lock = threading.Lock()
+
+    def record(self, cap: int, at_cap: bool) -> None:
+        with self._lock:
+            row = self.by_cap.setdefault(int(cap), [0, 0])
+            row[0] += 1
+            row[1] += bool(at_cap)
+
+
 @dataclass
 class DiagnosisData:
     """Measured channels of one data set, prepared for the diagnosis fits."""
@@ -58,9 +76,11 @@ class DiagnosisData:
     supply_frequency: float
     current_used: np.ndarray | None = None  # (N,) False where the conditioning masked a current sample
     kernel: KernelCache = field(init=False, repr=False, compare=False)  # the model's outputs of this input
+    fits: FitTally = field(init=False, repr=False, compare=False)  # how the fits on this record ended
 
     def __post_init__(self):
         self.kernel = KernelCache(self.v_alpha, self.v_beta, self.linear, self.sample_time)
+        self.fits = FitTally()
 
     @classmethod
     def from_dataset(cls, ds: StartupDataset) -> DiagnosisData:
@@ -354,6 +374,7 @@ class JointModel:
         with quiet():
             sol = optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale="jac",
                                          xtol=tol, ftol=tol, gtol=1e-8, max_nfev=max_iterations)
+        self.data.fits.record(max_iterations, sol.status == 0)  # status 0: stopped at max_nfev
         return to_x(sol.x[None, :])[0]
 
     def prior(self, X: np.ndarray) -> np.ndarray:

@@ -240,8 +240,18 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         "conditioning_check": checks,
         "held_by_base": held_by_base(list(base.base_names), base_x, ctx, settings, rated, base_se),
         "settings": dict(settings.__dict__),
+        "fits": fits_ended(sel.data.fits, settings.max_iterations),
         "wall_time_s": time.perf_counter() - t0,
     }
     doc["_models"] = {"base": base_fit, "final": final, "full_x": full_x, "band": q_before.threshold,
                       "selector": sel}
     return doc
+
+
+def fits_ended(tally, cap: int) -> dict:
+    """How the selection's local fits ended (:class:`.fit.FitTally`): of those run to convergence
+    (evaluation cap ``cap``, ``diagnosis.max_iterations``), how many stopped at the cap instead;
+    ``by_cap`` every cap's ``[fits, stopped at it]`` (the screening's brief legs stop at theirs by design)."""
+    n, at_cap = tally.by_cap.get(int(cap), [0, 0])
+    return {"cap": int(cap), "to_convergence": int(n), "stopped_at_cap": int(at_cap),
+            "by_cap": {str(k): list(v) for k, v in sorted(tally.by_cap.items())}}

@@ -172,6 +172,15 @@ def fitted_parameter(name: str, p: dict) -> str:
     return f"{name} = {p['value']:.4g}{u} +- {p['standard_error']:.2g}{u}"
 
 
+def capped_fit_lines(fits: dict | None) -> list[str]:
+    """The warning of diagnosis.md when local fits meant to converge stopped at their safety cap."""
+    if not fits or not fits.get("stopped_at_cap"):
+        return []
+    return [f"**Not converged:** {fits['stopped_at_cap']} of {fits['to_convergence']} local fits stopped at the safety "
+            f"cap of {fits['cap']} evaluations (`diagnosis.max_iterations`) instead of converging: the verdict may "
+            "hang on where they stopped (run again with a higher cap to see whether it moves).", ""]
+
+
 def render_markdown(doc: dict) -> str:
     loc = doc["localisation"]
     gb, ga = doc["gap_before"], doc["gap_after"]
@@ -183,6 +192,7 @@ def render_markdown(doc: dict) -> str:
              f"Share of the excess held-out misfit (above the noise) explained: "
              f"{100 * doc['explained_share']:.0f} %.", "",
              f"Where: {loc['summary']}.", ""]
+    lines += capped_fit_lines(doc.get("fits"))
     if doc["per_effect"]:
         lines += ["| effect (in order of selection) | own share (drop-one) | share beside the others (the rule's) "
                   "| fitted parameters (+- standard error) |", "|---|---|---|---|"]
