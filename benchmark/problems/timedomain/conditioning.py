@@ -66,8 +66,10 @@ def significant(value: float, standard_error: float, amplitude: float) -> bool:
     return abs(value) > max(OFFSET_SIGNIFICANCE * amplitude, OFFSET_STANDARD_ERRORS * standard_error)
 
 
-#: A record shorter than this many supply periods is not conditioned (too short to tell).
-MIN_PERIODS = 3.0
+#: Supply periods a switch-on's electrical start lasts (the flux build-up and the DC-offset
+#: current peaks): a record no longer than that holds nothing settled to condition by (it is not
+#: conditioned), and the diagnosis's first segment is that long (:mod:`.diagnosis.folds`).
+ELECTRICAL_START_PERIODS = 3.0
 
 #: A record whose supply period is shorter than 1/this many samples is not conditioned: its
 #: switch-on, offsets and peaks cannot be told from the waveform (a frequency estimated from the
@@ -140,8 +142,8 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
                                             soft=measured_voltage)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError, IndexError) as exc:
             return rec, [f"not conditioned ({type(exc).__name__}: {exc})"], [], 0.0
-    if not np.isfinite(report.f0) or report.f0 <= 0 or n * ts * report.f0 < MIN_PERIODS:
-        return rec, ["not conditioned: fewer than three supply periods"], [], 0.0
+    if not np.isfinite(report.f0) or report.f0 <= 0 or n * ts * report.f0 < ELECTRICAL_START_PERIODS:
+        return rec, [f"not conditioned: fewer than {ELECTRICAL_START_PERIODS:g} supply periods"], [], 0.0
     if report.f0 * ts > MAX_PERIOD_FRACTION:  # a supply the sampling does not resolve: nothing to trim by
         return rec, [f"not conditioned: a supply of {report.f0:.4g} Hz has fewer than {1 / MAX_PERIOD_FRACTION:.0f} "
                      f"samples per period"], [], 0.0

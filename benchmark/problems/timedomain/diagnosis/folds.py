@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from benchmark.problems.timedomain.conditioning import ELECTRICAL_START_PERIODS
+
 SEGMENTS = ("electrical_start", "acceleration", "steady_state", "free_stop")
-#: Supply periods of the electrical start segment (the largest current peaks and the flux build-up).
-ELECTRICAL_START_PERIODS = 3.0
 #: Contiguous blocks each segment is cut into; they alternate between the two folds.
 BLOCKS_PER_SEGMENT = 4
 
