@@ -169,24 +169,50 @@ def _loop_flux_rate(R, R_t, i_a, i_b, w, p_a, p_b):
     return 0.0, 0.0
 
 
+@compiled(_nrt=False, inline="always")
+def _row_constants(c, th, pre):
+    """What :func:`_derivative` computes from the row alone, once per trajectory, by the same
+    operations (so the same numbers): the resistances at the temperature ``th`` (K), which stays
+    put when ``h_th`` is 0, ``1/(1/R_r1 + g_fe)``, ``p/J``, the stator current per leakage flux
+    when the leakage does not saturate and the magnetising current per flux when the main flux
+    does not; into ``pre``."""
+    alpha = c[16]
+    heat = 1.0 + alpha * th
+    heat_r = 1.0 + alpha * th * (1.0 + c[38])
+    pre[0] = c[0] * heat
+    pre[1] = c[3] * heat_r
+    pre[2] = c[4] * heat_r
+    pre[3] = c[39] * heat_r
+    pre[4] = 1.0 / (1.0 / pre[1] + c[6])
+    pre[5] = c[20] / c[17]
+    pre[6] = _leak_gain(c, 0.0) / c[1]
+    pre[7] = 1.0 / c[2]
+
+
 @compiled(_nrt=False)
-def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
+def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm, pre):
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
     gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
     Ud, i0, h_th, alpha, J, fv, fc, p = c[13], c[14], c[15], c[16], c[17], c[18], c[19], c[20]
     ps_a, ps_b, pm_a, pm_b, p2_a, p2_b, w, th = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
     v_a = v_a - c[21]
     v_b = v_b - c[22]
-    heat = 1.0 + alpha * th
-    heat_r = 1.0 + alpha * th * (1.0 + c[38])
-    Rs_t = Rs * heat
-    R_r1_t = R_r1 * heat_r
-    R_r2_t = R_r2 * heat_r
     R_r3, Ls3 = c[39], c[40]
-    R_r3_t = R_r3 * heat_r
+    if h_th > 0.0:
+        heat = 1.0 + alpha * th
+        heat_r = 1.0 + alpha * th * (1.0 + c[38])
+        Rs_t = Rs * heat
+        R_r1_t = R_r1 * heat_r
+        R_r2_t = R_r2 * heat_r
+        R_r3_t = R_r3 * heat_r
+    else:
+        Rs_t, R_r1_t, R_r2_t, R_r3_t = pre[0], pre[1], pre[2], pre[3]
     d_a = ps_a - pm_a
     d_b = ps_b - pm_b
-    g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_
+    if c[10] == 0.0:
+        g = pre[6]
+    else:
+        g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_
     is_a = d_a * g
     is_b = d_b * g
     p3_a, p3_b = x[10], x[11]
@@ -206,14 +232,17 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
             i3_a = i3_a / g0
             i3_b = i3_b / g0
     else:
-        pm = math.sqrt(pm_a * pm_a + pm_b * pm_b)
-        sm = _sat(pm, ms_k, ms_psi, ms_exp)
-        if c[23] != 0.0:
-            sm += c[23] * (pm / ms_psi) ** c[24]
-        gm = sm / LM
+        if ms_k == 0.0 and c[23] == 0.0:
+            gm = pre[7]
+        else:
+            pm = math.sqrt(pm_a * pm_a + pm_b * pm_b)
+            sm = _sat(pm, ms_k, ms_psi, ms_exp)
+            if c[23] != 0.0:
+                sm += c[23] * (pm / ms_psi) ** c[24]
+            gm = sm / LM
         im_a = pm_a * gm
         im_b = pm_b * gm
-        inv_g = 1.0 / (1.0 / R_r1_t + gfe)
+        inv_g = 1.0 / (1.0 / R_r1_t + gfe) if h_th > 0.0 else pre[4]
         e_a = (is_a + i2_a + i3_a - w * pm_b / R_r1_t - im_a) * inv_g
         e_b = (is_b + i2_b + i3_b + w * pm_a / R_r1_t - im_b) * inv_g
     # inverter drop: per phase, then amplitude-invariant Clarke
@@ -247,7 +276,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
         wl = x[8]
         t_sh = _coupling_torque(x[9], wm - wl, c[32], c[33], c[37], c[44])
         drive_m = t_m - t_sh - fv * wm
-        out[6] = p / J * (drive_m - _resist(direction, drive_m, fc))
+        out[6] = pre[5] * (drive_m - _resist(direction, drive_m, fc))
         t_pass, t_dyn = _loads(c, t, wl, x[12])
         drive_l = t_sh - t_dyn
         out[8] = (drive_l - _resist(dir_l, drive_l, t_pass)) / J_l
@@ -257,11 +286,11 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm):
         fct = fc + t_pass
         t_d = t_m - t_dyn
         if direction != 0.0:
-            out[6] = -w * fv / J + p / J * (t_d - fct * direction)
+            out[6] = -w * fv / J + pre[5] * (t_d - fct * direction)
         elif t_d > fct:
-            out[6] = -w * fv / J + p / J * (t_d - fct)
+            out[6] = -w * fv / J + pre[5] * (t_d - fct)
         elif t_d < -fct:
-            out[6] = -w * fv / J + p / J * (t_d + fct)
+            out[6] = -w * fv / J + pre[5] * (t_d + fct)
         else:
             out[6] = 0.0
         out[8] = 0.0
@@ -350,10 +379,11 @@ def _stick(c, x, w0, wl0, t, tm):
 def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
     """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s) (the load side's on a
     two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps).
-    ``work``: (7, N_WORK) scratch; ``warm``: a T-mode row's node flux solved from the last
-    solution (:func:`_t_solve`)."""
+    ``work``: (8, N_WORK) scratch (row 7: :func:`_row_constants`); ``warm``: a T-mode row's
+    node flux solved from the last solution (:func:`_t_solve`)."""
     n = v_a.shape[0]
     tm = work[6]
+    pre = work[7]
     if _t_mode(c):
         _t_constants(c, tm, warm)
     x = work[0]
@@ -369,6 +399,7 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
     two = c[31] > 0.0
     ns = N_STATES if _armature(c) else N_STATES - 1  # the armature's state only where it moves
     xt[N_STATES - 1] = x[N_STATES - 1]
+    _row_constants(c, x[7], pre)
     for k in range(n):
         # without a stator-side iron loss the recorded current is the stator branch current at
         # x, which the step's first derivative computes (the same operations): taken from there
@@ -392,19 +423,19 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
             wl0 = x[8]
             d = _sign(w0)
             dl = _sign(wl0)
-            _derivative(c, x, va0, vb0, d, dl, ts, k1, tm)
+            _derivative(c, x, va0, vb0, d, dl, ts, k1, tm, pre)
             if j == 0 and not own:
                 out[0, k] = k1[N_STATES]
                 out[1, k] = k1[N_STATES + 1]
             for s in range(ns):
                 xt[s] = x[s] + 0.5 * hs * k1[s]
-            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2, tm)
+            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2, tm, pre)
             for s in range(ns):
                 xt[s] = x[s] + 0.5 * hs * k2[s]
-            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3, tm)
+            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3, tm, pre)
             for s in range(ns):
                 xt[s] = x[s] + hs * k3[s]
-            _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4, tm)
+            _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4, tm, pre)
             for s in range(ns):
                 x[s] = x[s] + hs / 6.0 * (k1[s] + 2.0 * (k2[s] + k3[s]) + k4[s])
             _stick(c, x, w0, wl0, ts + hs, tm)
@@ -424,7 +455,7 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
 @compiled(nogil=True)
 def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
     """Rows ``start..stop-1`` of ``rows`` into ``out`` (left NaN for invalid rows); releases the GIL."""
-    work = np.empty((7, N_WORK))
+    work = np.empty((8, N_WORK))
     x0 = np.empty(N_STATES)
     for m in range(start, stop):
         c = rows[m]
@@ -450,5 +481,5 @@ def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
     """One trajectory from state ``x0`` (modified in place to the final state) starting at time
     ``t0`` (s): (3, N)."""
     out = np.empty((3, v_a.shape[0]))
-    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((7, N_WORK)), False)
+    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((8, N_WORK)), False)
     return out
