@@ -166,8 +166,8 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
         quantised channels at least ``q / sqrt(12)``; coloured noise and the estimate's own
         uncertainty allowed for)."""
         if self._noise is None:
-            self._noise = [[record_noise(r, self.dataset.supply_frequency)[0].get(c) for c in WEIGHT_KEYS]
-                           for r in self.dataset.startups]
+            per_record = [record_noise(r, self.dataset.supply_frequency)[0] for r in self.dataset.startups]
+            self._noise = [[noise.get(c) for c in WEIGHT_KEYS] for noise in per_record]
         return self._noise
 
     def hac_bandwidth_floor(self) -> float:
