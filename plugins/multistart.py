@@ -42,7 +42,6 @@ from __future__ import annotations
 import math
 import warnings
 
-import cma
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -210,6 +209,8 @@ def _cost_stage(problem, coords, best: dict, seed: int, budget: int, sigma0: flo
     s2 = best["ss"] / max(J.shape[0] - n, 1)
     w, V = np.linalg.eigh(np.linalg.pinv(J.T @ J) * s2)
     L = V * np.sqrt(np.clip(w, 0.0, 0.01))
+    import cma  # here, not at the top: its import (1.4 s, scipy.stats, pyplot) only where the stage runs
+
     n_cma = max(n, 2)  # cma 4.5 fails in 1-D
     seeds = np.random.SeedSequence(int(seed)).generate_state(int(runs))
     saved = np.random.get_state()  # cma samples with NumPy's global state
