@@ -32,10 +32,8 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
 LONGEST_FILES = (
     "problems/timedomain/test_diagnosis.py",  # ~120 s over its tests
     "cli/test_readme.py",  # ~120 s: every quick fenced command of the README and docs
-    "problems/timedomain/test_load_after_slow_ramp.py",  # ~70 s
     "problems/timedomain/test_braking_stop.py",  # ~60 s
     "cli/test_suggested_commands.py",
-    "problems/timedomain/test_load_step_instant.py",
     "studies/test_suite.py",
     "analysis/test_sweep.py",
     "core/test_resume.py",

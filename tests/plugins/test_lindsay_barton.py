@@ -134,7 +134,6 @@ def test_deterministic():
     assert np.array_equal(r1.x, r2.x) and r1.fun == r2.fun and r1.nfev == r2.nfev
 
 
-@pytest.mark.slow
 def test_runs_on_the_time_domain_problem_from_a_crude_start():
     cfg = compose_config(["problem=timedomain", "optimizer=lindsay_barton"])
     problem = build_problem(cfg)

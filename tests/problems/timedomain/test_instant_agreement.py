@@ -12,6 +12,7 @@ place it (its own chi^2 rises by at most ``band_k``^2) takes the other's (``Sele
 
 from __future__ import annotations
 
+import pytest
 import yaml
 
 from tests.conftest import diagnose_with, remade_blind_set
@@ -41,6 +42,7 @@ seed: 1626851483
 SWITCH_ON = 0.45768159413517195  # s, from the set's truth file (t_step)
 
 
+@pytest.mark.slow
 def test_a_load_switched_on_inside_one_folds_block_is_located(tmp_path):
     _, folder = remade_blind_set(GENERATOR, tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque"], "seed=400")

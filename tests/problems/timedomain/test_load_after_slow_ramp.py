@@ -44,6 +44,7 @@ stop: {duration: 5.993189560598312, sample_time: 0.001}
 """)
 
 
+@pytest.mark.slow
 def test_a_load_step_after_a_slow_ramp_is_named_alone(tmp_path):
     made, folder = remade_blind_set(BLIND_LOAD_AFTER_RAMP, tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "two_mass"])

@@ -80,6 +80,7 @@ def generator(tmp_path_factory):
     return diagnose_with(folder, tmp / "out", ["load_torque", "speed_sensor_gain", "double_cage", "iron_loss"])
 
 
+@pytest.mark.slow
 def test_a_dc_generator_the_base_reads_as_viscous_friction_is_named(generator):
     doc = generator
     gap = (doc["gap_before"]["heldout_rms_over_noise"], doc["gap_after"]["heldout_rms_over_noise"])
@@ -91,6 +92,7 @@ def test_a_dc_generator_the_base_reads_as_viscous_friction_is_named(generator):
     assert doc["explained_share"] > 0.95 and gap[1] < 1.3, (doc["explained_share"], gap)
 
 
+@pytest.mark.slow
 def test_the_generator_s_instant_and_torque_are_found(generator):
     load = next(e for e in generator["per_effect"] if e["effect"] == "load_torque")["physical"]
     print(load)

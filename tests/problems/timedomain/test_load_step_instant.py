@@ -60,6 +60,7 @@ def test_the_envelope_looks_for_a_rise_not_the_start_up_s_tail(late_step):
     assert step < ctx.load_change < step + 0.08
 
 
+@pytest.mark.slow
 def test_a_late_load_step_is_named_alone_at_its_instant(late_step, tmp_path):
     """With the whole catalogue a cheap screening (fold A fit from the first start, six kept)
     ranked the load below the base (5933 against 5868), so it was never fitted fully; now every

@@ -38,6 +38,7 @@ seed: 1085214444
 """)
 
 
+@pytest.mark.slow
 def test_a_filtered_tachometer_is_explained_by_its_gain_and_lag(tmp_path):
     _, folder = remade_blind_set(TACHOMETER_FILTER, tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain", "two_mass", "load_torque"])
