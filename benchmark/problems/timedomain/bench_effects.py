@@ -183,11 +183,27 @@ class SpeedSensorGain(Effect):
         form = {**self.form, **(form or {})}
         return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0)), 0.0, 0.0, 0.0])
 
+    #: The largest offset of a tachometer (p.u. of synchronous speed) where the record does not
+    #: say what it reads at rest.
+    MAX_OFFSET = 0.02
+
+    def _offset_range(self, ctx) -> tuple[float, float]:
+        """The offset's range (p.u. of synchronous speed): what the channel reads while the rotor
+        is at rest, within that reading's noise band (``ctx.facts["speed_reading_at_rest"]``,
+        :func:`~benchmark.problems.timedomain.diagnosis.scales.speed_reading_at_rest`), else
+        +-:data:`MAX_OFFSET`."""
+        rest = ctx.facts.get("speed_reading_at_rest")
+        if not rest or not ctx.w_sync > 0:
+            return -self.MAX_OFFSET, self.MAX_OFFSET
+        return (rest["mean"] - rest["band"]) / ctx.w_sync, (rest["mean"] + rest["band"]) / ctx.w_sync
+
     def extra_bounds(self, ctx):
-        return np.array([-0.1, -0.02, -0.05, -0.05, 0.0]), np.array([0.1, 0.02, 0.05, 0.05, self.MAX_LAG])
+        lo, hi = self._offset_range(ctx)
+        return np.array([-0.1, lo, -0.05, -0.05, 0.0]), np.array([0.1, hi, 0.05, 0.05, self.MAX_LAG])
 
     def extra_starts(self, ctx):
-        return [np.array([0.0, 0.0, 0.0, 0.0, 0.0])]
+        lo, hi = self._offset_range(ctx)
+        return [np.array([0.0, min(max(0.0, lo), hi), 0.0, 0.0, 0.0])]
 
     def measure(self, sim, extras, ctx):
         """``(1 + g + a sin(theta) + b cos(theta)) F(w) + offset w_sync``: gain, offset, a ripple

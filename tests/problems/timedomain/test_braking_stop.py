@@ -65,6 +65,7 @@ def _base(tmp_path, scenario):
     return est, used_ds, record, made.truth["parameters"]
 
 
+@pytest.mark.slow
 def test_a_braking_stop_is_set_aside_and_the_start_up_finds_J(tmp_path):
     est, used_ds, record, truth = _base(tmp_path, "blind")
     sr = record["stop_record"]

@@ -22,7 +22,7 @@ from synthetic.independent.dataset import make_spec
 from tests.conftest import diagnose_with, remade_blind_set
 
 
-@pytest.fixture(scope="module", params=["six_step", "dol"])
+@pytest.fixture(scope="module", params=["six_step", pytest.param("dol", marks=pytest.mark.slow)])
 def card_record(request, tmp_path_factory):
     spec = make_spec("paper_1kw", request.param, ["channel_delay"], seed=3, duration=0.5, sample_rate=10000.0,
                      forms={"channel_delay": "mux_skew"})

@@ -470,7 +470,12 @@ def test_rotor_heats_by_its_own_factor():
     """``rotor_heating`` c: at a winding temperature rise theta the rotor resistance is
     ``R_r (1 + alpha (1 + c) theta)``, the stator's ``R_s (1 + alpha theta)``: the state's
     derivative equals that of a row without c whose rotor resistance is scaled by the ratio."""
-    from benchmark.problems.timedomain.extended import IDX, N_WORK, _derivative
+    from benchmark.problems.timedomain.extended import IDX, N_WORK, _derivative, _row_constants
+
+    def derivative(c, x, *args):  # the stepper's derivative, its row constants at x's temperature
+        pre = np.zeros(N_WORK)
+        _row_constants(c, x[7], pre)
+        return _derivative(c, x, *args, np.zeros(N_WORK), pre)
 
     eff = EFFECTS["temperature_drift"]
     ctx = _ctx()
@@ -483,14 +488,14 @@ def test_rotor_heats_by_its_own_factor():
     same[IDX["th_rotor"]] = 0.0
     same[IDX["R_r1"]] *= (1 + alpha * 1.8 * theta) / (1 + alpha * theta)
     out_c, out_same = np.zeros(N_WORK), np.zeros(N_WORK)  # derivatives, then the stator current
-    t_c = _derivative(row, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_c, np.zeros(N_WORK))
-    t_same = _derivative(same, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_same, np.zeros(N_WORK))
+    t_c = derivative(row, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_c)
+    t_same = derivative(same, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_same)
     np.testing.assert_allclose(out_c, out_same, rtol=1e-12)
     assert t_c == pytest.approx(t_same, rel=1e-12)
     plain = row.copy()
     plain[IDX["th_rotor"]] = 0.0
     out_plain = np.zeros(N_WORK)
-    _derivative(plain, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_plain, np.zeros(N_WORK))
+    derivative(plain, x, 150.0, -40.0, 1.0, 0.0, 0.1, out_plain)
     assert abs(out_plain[2] - out_c[2]) > 1e-3 * abs(out_c[2])  # the factor moves the rotor's EMF
     cold_rotor = row.copy()
     cold_rotor[IDX["th_rotor"]] = -1.5  # a rotor that cools as the stator warms: not a valid row

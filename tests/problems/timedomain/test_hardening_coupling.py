@@ -19,6 +19,7 @@ import pytest
 from tests.conftest import diagnose_with, stored_set
 
 
+@pytest.mark.slow
 def test_a_hardening_coupling_is_named_alone(tmp_path):
     folder = stored_set("motulator_blind407_set26", tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["two_mass", "load_torque", "leakage_saturation"])

@@ -62,6 +62,7 @@ def round_one(doc: dict) -> dict:
     return {"base": first["heldout_chi2_from"]} | {r["effect"]: r["heldout_chi2"] for r in first["candidates"]}
 
 
+@pytest.mark.slow
 def test_a_load_the_fold_cannot_see_goes_to_none(tmp_path):
     _, folder = remade_blind_set(EFFECT_FREE, tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque"])

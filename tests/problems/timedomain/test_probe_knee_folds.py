@@ -17,6 +17,7 @@ better), and the probe saturation then is the whole story.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import yaml
 
 from benchmark.problems.timedomain.data import load_startup_dataset
@@ -77,6 +78,7 @@ def test_each_fold_holds_large_peaks_of_the_start(tmp_path):
     assert np.max(i_mag[~two_period_a & used]) < 43.9  # what the old blocks gave fold B
 
 
+@pytest.mark.slow
 def test_a_probe_knee_is_named_alone(tmp_path):
     doc = diagnose_with(remade(tmp_path), tmp_path / "out", ["current_sensor_saturation", "speed_sensor_gain"])
     assert doc["verdict"] == "current_sensor_saturation", doc["selection"]

@@ -54,6 +54,7 @@ from benchmark.problems.timedomain.diagnosis.scales import (
     held_by_base,
     pullout_torque,
     rated_torque,
+    speed_reading_at_rest,
 )
 from benchmark.problems.timedomain.diagnosis.selection import Selector, SetFit
 from benchmark.problems.timedomain.noise import combined
@@ -147,7 +148,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     runs the rule at several shares this way)."""
     t0 = time.perf_counter()
     data = DiagnosisData.from_dataset(ds)
-    facts = {**ds.facts(), **data.facts(settings.base_case), "offsets_left": offsets_left(ds)}
+    facts = {**ds.facts(), **data.facts(settings.base_case), "offsets_left": offsets_left(ds),
+             "speed_reading_at_rest": speed_reading_at_rest(data, base_estimate)}
     ctx = base_context(data, base_estimate, ds.dc_link_voltage, ds.nameplate, facts)
     fold_a, fold_b = segment_folds(data)
     masks = {"A": fold_a, "B": fold_b}

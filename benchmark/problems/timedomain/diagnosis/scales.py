@@ -115,6 +115,38 @@ def held_by_base(names: list[str], x: np.ndarray, ctx, settings, rated: float | 
                     f"apart from it on this record"}]
 
 
+def speed_reading_at_rest(data, estimate: dict[str, float]) -> dict | None:
+    """What the speed channel reads while the rotor is still at rest, in rad/s: ``{"mean",
+    "band", "samples"}``, or None without a speed channel. The model starts every record from
+    rest; the rotor is still there, to within what the sensor resolves, for the leading samples
+    at which the base model's simulated speed stays within the channel's noise band
+    (``OFFSET_STANDARD_ERRORS`` times its noise estimate; at least the first sample, the
+    switch-on itself). A sensor's offset is what it reads there: within ``band``, the noise band
+    of one reading plus the largest simulated speed over those samples, of their ``mean``
+    (one reading's band, not the mean's standard error: a quantised channel reads the same level
+    at rest whatever offset lies inside its quantum). A tachometer whose offset the fits could
+    set elsewhere took a load's leftover as a speed error (motulator, held-out seed 419 set 16:
+    an eddy-current brake read as an offset of 0.019 of synchronous speed, at its bound, on a
+    record whose first 33 samples read 0 in steps of 0.5 rad/s)."""
+    if not data.has_speed:
+        return None
+    from benchmark.problems.timedomain.conditioning import OFFSET_STANDARD_ERRORS
+    from benchmark.problems.timedomain.extended import base_rows
+    from benchmark.problems.timedomain.motor import PARAMETER_NAMES
+
+    theta = np.array([[float(estimate[n]) for n in PARAMETER_NAMES]])
+    simulated = data.kernel.simulate(base_rows(theta, data.pole_pairs))[0, 2]
+    band = OFFSET_STANDARD_ERRORS * float(data.noise["speed"].std)
+    still = np.abs(np.nan_to_num(simulated, nan=np.inf)) <= band
+    m = max(1, int(np.argmin(still)) if not still.all() else len(still))
+    readings = np.asarray(data.meas[2][:m], float)
+    readings = readings[np.isfinite(readings)]
+    if not len(readings) or not np.isfinite(band):
+        return None
+    return {"mean": float(np.mean(readings)), "band": band + float(np.max(np.abs(simulated[:m]))),
+            "samples": int(len(readings))}
+
+
 def base_context(data, estimate: dict[str, float], dc_link_voltage: float | None, nameplate: dict | None = None,
                  facts: dict | None = None):
     """The effects' reference scales from the record and the base estimate: the rated torque
