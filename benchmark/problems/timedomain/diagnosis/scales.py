@@ -15,6 +15,9 @@ from dataclasses import replace
 import numpy as np
 
 from benchmark.core.effects import effect_context
+from benchmark.problems.timedomain.conditioning import OFFSET_STANDARD_ERRORS
+from benchmark.problems.timedomain.extended import base_rows
+from benchmark.problems.timedomain.motor import InductionMotor
 
 #: Share of the estimated rated torque (:func:`estimated_rated_torque`) that the local fits may
 #: always give the friction, whatever the base identification says (a motor's own friction is
@@ -130,15 +133,11 @@ def speed_reading_at_rest(data, estimate: dict[str, float]) -> dict | None:
     record whose first 33 samples read 0 in steps of 0.5 rad/s)."""
     if not data.has_speed:
         return None
-    from benchmark.problems.timedomain.conditioning import OFFSET_STANDARD_ERRORS
-    from benchmark.problems.timedomain.extended import base_rows
-    from benchmark.problems.timedomain.motor import PARAMETER_NAMES
-
-    theta = np.array([[float(estimate[n]) for n in PARAMETER_NAMES]])
+    theta = InductionMotor.from_dict(estimate).vector()[None, :]
     simulated = data.kernel.simulate(base_rows(theta, data.pole_pairs))[0, 2]
     band = OFFSET_STANDARD_ERRORS * float(data.noise["speed"].std)
-    still = np.abs(np.nan_to_num(simulated, nan=np.inf)) <= band
-    m = max(1, int(np.argmin(still)) if not still.all() else len(still))
+    moving = np.flatnonzero(~(np.abs(np.nan_to_num(simulated, nan=np.inf)) <= band))
+    m = max(1, int(moving[0]) if len(moving) else len(simulated))
     readings = np.asarray(data.meas[2][:m], float)
     readings = readings[np.isfinite(readings)]
     if not len(readings) or not np.isfinite(band):
