@@ -125,9 +125,10 @@ def speed_reading_at_rest(data, estimate: dict[str, float]) -> dict | None:
     at which the base model's simulated speed stays within the channel's noise band
     (``OFFSET_STANDARD_ERRORS`` times its noise estimate; at least the first sample, the
     switch-on itself). A sensor's offset is what it reads there: within ``band``, the noise band
-    of one reading plus the largest simulated speed over those samples, of their ``mean``
-    (one reading's band, not the mean's standard error: a quantised channel reads the same level
-    at rest whatever offset lies inside its quantum). A tachometer whose offset the fits could
+    of one reading plus the largest simulated speed over those samples, of their ``mean`` (one
+    reading's band, not the mean's standard error: a quantised channel reads the same level at
+    rest whatever offset lies inside its quantum); None where that band is 0 (a noise-free channel
+    at an exact rest gives no range a fit can search). A tachometer whose offset the fits could
     set elsewhere took a load's leftover as a speed error (motulator, held-out seed 419 set 16:
     an eddy-current brake read as an offset of 0.019 of synchronous speed, at its bound, on a
     record whose first 33 samples read 0 in steps of 0.5 rad/s)."""
@@ -140,10 +141,10 @@ def speed_reading_at_rest(data, estimate: dict[str, float]) -> dict | None:
     m = max(1, int(moving[0]) if len(moving) else len(simulated))
     readings = np.asarray(data.meas[2][:m], float)
     readings = readings[np.isfinite(readings)]
-    if not len(readings) or not np.isfinite(band):
+    band += float(np.max(np.abs(simulated[:m])))
+    if not len(readings) or not (np.isfinite(band) and band > 0):  # a noise-free channel: no range to give
         return None
-    return {"mean": float(np.mean(readings)), "band": band + float(np.max(np.abs(simulated[:m]))),
-            "samples": int(len(readings))}
+    return {"mean": float(np.mean(readings)), "band": band, "samples": int(len(readings))}
 
 
 def base_context(data, estimate: dict[str, float], dc_link_voltage: float | None, nameplate: dict | None = None,
