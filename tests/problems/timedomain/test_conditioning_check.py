@@ -61,3 +61,7 @@ def test_an_offset_removal_is_named_only_where_the_record_has_the_offset(paper_r
     unnamed = [line for line in doc["conditioning"] if line.startswith("sensor_offset removed on load but not named")]
     assert len(unnamed) == (0 if named else 1)
     assert len(doc["conditioning_check"]) == 1
+    # the check's refits are counted with the selection's fits (one tally per record)
+    sel = doc["_models"]["selector"]
+    assert [other.data.fits for other in sel.removal_fits.values()] == [sel.data.fits]
+    assert doc["fits"]["to_convergence"] == sel.data.fits.by_cap[200][0] > 0

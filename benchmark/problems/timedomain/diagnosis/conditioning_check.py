@@ -106,8 +106,10 @@ def at_rest_row(ds: StartupDataset, sel: Selector) -> dict | None:
 
 def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
     """A selector of ``ds`` (the record with removals put back) with ``sel``'s noise levels,
-    scales, settings and rule, so that its held-out chi^2 compare with ``sel``'s."""
+    scales, settings and rule, so that its held-out chi^2 compare with ``sel``'s, and ``sel``'s
+    tally of fits (:class:`.fit.FitTally`), so that the document's ``fits`` counts these refits too."""
     data = replace(DiagnosisData.from_dataset(ds), noise=sel.data.noise)
+    data.fits = sel.data.fits
     masks = dict(zip(FOLDS, segment_folds(data), strict=True))
     ctx = replace(sel.ctx, facts={**sel.ctx.facts, "offsets_left": offsets_left(ds)})
     other = Selector(data, sel.settings, ctx, sel.centre, sel.fc_scale, masks, sel.rule, sel.order)
