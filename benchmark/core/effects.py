@@ -102,6 +102,9 @@ class Effect:
     problem : ``timedomain`` or ``admittance``.
     size_name, size_unit : the size parameter of the plant and its unit.
     realistic : documented realistic range of the size.
+    size_falls_with_effect : True where a larger size is a smaller effect (an iron loss's
+        core-loss resistance over the magnetising reactance): the smallest realistic instance is
+        then at ``realistic[1]`` (:meth:`realistic_share`).
     extra_names : the augmentation's extra parameters.
     extra_units : the unit of each extra parameter, in :attr:`extra_names` order (a ratio says
         what it is relative to: ``p.u. of the DC-link voltage``, ``fraction of the record``;
@@ -118,6 +121,7 @@ class Effect:
     size_name = "size"
     size_unit = "-"
     realistic: tuple[float, float] = (0.0, 1.0)
+    size_falls_with_effect = False
     extra_names: tuple[str, ...] = ()
     extra_units: tuple[str, ...] = ()
     physics = ""
@@ -245,6 +249,18 @@ class Effect:
         diagnosis does not name it (:data:`benchmark.problems.timedomain.diagnosis.selection.
         NEGLIGIBLE_SHARE`)."""
         return None
+
+    def realistic_share(self, extras: np.ndarray, ctx: EffectContext) -> float | None:
+        """How large the fitted effect is against the smallest realistic instance of it (1: as
+        small as a real machine or instrument has it; 0: absent), from :meth:`fitted_size`; None
+        where the effect states no size."""
+        size = self.fitted_size(extras, ctx)
+        if size is None:
+            return None
+        lo, hi = self.realistic
+        if self.size_falls_with_effect:
+            return float(hi / size) if size > 0 else float("inf")
+        return float(size / lo) if lo > 0 else float("inf")
 
     def measured_directly(self, ctx: EffectContext) -> bool:
         """Whether the record measures this effect's parameters itself, apart from the fit (then

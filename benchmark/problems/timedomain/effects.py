@@ -275,6 +275,7 @@ class IronLoss(Effect):
     name = "iron_loss"
     size_name = "R_fe_over_X_M"
     realistic = (20.0, 100.0)
+    size_falls_with_effect = True  # the smallest real core loss has the largest R_fe/X_M, 100
     extra_names = ("g_fe_pu", "fe_position")
     extra_units = ("p.u. of 1/(w_e L_M)", "fraction at stator EMF")
     FORM_DRAWS = {"position": [0.0, 1.0]}
@@ -297,6 +298,12 @@ class IronLoss(Effect):
 
     def extra_starts(self, ctx):
         return [np.array([0.02, 0.5]), np.array([0.02, 0.0]), np.array([0.02, 1.0])]
+
+    def fitted_size(self, extras, ctx):
+        """``R_fe/(w_e L_M)`` of the fitted conductance, ``1/g_fe_pu`` (inf for none): where the
+        loss sits along the leakage does not change how large it is."""
+        g = float(np.ravel(extras)[0])
+        return 1.0 / g if g > 0 else float("inf")
 
     def augment(self, rows, extras, ctx):
         """Conductance ``g_fe_pu/(w_e L_M)``, a share ``fe_position`` of it across the stator

@@ -184,6 +184,37 @@ def test_tachometer_ripple_once_per_revolution():
     assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004, 0.0]), ctx) > 0.1 * eff.realistic[0]
 
 
+def test_an_iron_loss_far_below_any_real_core_is_not_named():
+    """The iron loss states its size, ``R_fe/(w_e L_M) = 1/g_fe_pu`` (real cores 20-100: 1-5 % of
+    a small motor's rating; the larger, the smaller the loss), so the selection's physical check
+    applies to it: fitted on all data at a tenth of the smallest real loss or less, it is not
+    named. The fits of held-out plant seed 430: 0.0226-0.0654 p.u. where an iron loss was injected
+    (sets 7, 14, 15), 0.00033 p.u. beside an eddy-current brake's load where none was (set 11)."""
+    from types import SimpleNamespace
+
+    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE, Selector
+
+    eff, ctx = EFFECTS["iron_loss"], _ctx()
+    assert eff.fitted_size(np.array([0.02, 0.5]), ctx) == pytest.approx(50.0)
+    assert eff.realistic_share(np.array([0.01, 0.0]), ctx) == pytest.approx(1.0)  # R_fe/X_M = 100: the smallest
+    assert eff.realistic_share(np.array([0.05, 1.0]), ctx) == pytest.approx(5.0)  # R_fe/X_M = 20: the largest
+    assert eff.realistic_share(np.array([0.0, 0.5]), ctx) == 0.0  # no loss at all
+    assert EFFECTS["double_cage"].realistic_share(np.zeros(4), ctx) is None  # states no size: not checked
+    tach = EFFECTS["speed_sensor_gain"]  # a size that grows with the effect: over the smallest, 1 %
+    assert tach.realistic_share(np.array([0.0023, 0.0, 0.0, 0.0, 0.0]), ctx) == pytest.approx(0.23)
+
+    sel = Selector.__new__(Selector)
+    sel.ctx = ctx
+    model = SimpleNamespace(effects=[eff], slices=[slice(7, 9)], effect_names=["iron_loss"])
+    sf = SimpleNamespace(model=model, names=["iron_loss"])
+    for g, refused in ((0.0003272868, True), (0.0226, False), (0.0654, False),
+                       (0.9 * NEGLIGIBLE_SHARE * 0.01, True), (1.1 * NEGLIGIBLE_SHARE * 0.01, False)):
+        why = sel.refused(sf, np.concatenate([np.ones(7), [g, 0.0225]]))
+        assert ("iron_loss" in why) is refused, (g, why)
+        if refused:
+            assert why["iron_loss"].startswith("fitted on all data its size is negligible")
+
+
 def test_tachometer_filter_lags_an_accelerating_shaft():
     """``tach_lag``: the reading through ``1/(1 + s tau)``; on a shaft accelerating at ``a`` it
     settles ``tau a`` below the speed, and a lag far below the sample time still moves the
