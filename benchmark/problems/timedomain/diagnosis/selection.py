@@ -35,8 +35,9 @@ tenth of its smallest realistic size, and where the record measures the effect i
 offset, on the steady tail) the fit must agree with that measurement (:meth:`Selector.refused`);
 the least needed effect that does not is dropped (``pruned``) and the check repeats; a dropped
 effect leaves the candidates and the forward selection resumes. An effect that states its size
-or is measured directly is checked already on entry (:meth:`Selector.refused_on_entry`): refused
-on all data, it leaves the candidates before any round is fitted beside it.
+or is measured directly is checked already on entry (:meth:`Selector.refused_on_entry`), alone or
+as a member of a pair: refused on all data, it leaves the candidates before any round is fitted
+beside it.
 """
 
 from __future__ import annotations
@@ -54,6 +55,9 @@ from benchmark.problems.timedomain.diagnosis.screening import Screening
 from benchmark.problems.timedomain.diagnosis.set_fit import FOLDS, SetFit
 
 __all__ = ["FOLDS", "NEGLIGIBLE_SHARE", "Selector", "SetFit"]
+
+#: What :meth:`Selector.pair_step` returns when a member of the pair that earns is refused on entry.
+REFUSED = "refused on entry"
 
 
 class Selector(Screening, Instants):
@@ -280,6 +284,8 @@ class Selector(Screening, Instants):
             pair = self.pair_step(cur, pool, trials, band, rounds, progress)
             if pair is None:
                 return cur
+            if pair is REFUSED:  # a member out on entry: the round again from the same set without it
+                continue
             names, cur = pair
             order += names
 
@@ -309,7 +315,9 @@ class Selector(Screening, Instants):
 
     def pair_step(self, cur: SetFit, pool, singles: dict, band: float, rounds: list, progress=None):
         """Two candidates that each earn their place beside the other, or None (module
-        docstring); appends its round. Returns (names in entering order, the pair's fit)."""
+        docstring); appends its round. Returns (names in entering order, the pair's fit), or
+        :data:`REFUSED` where the first pair that earns has a member refused on entry
+        (:meth:`refused_on_entry`: it leaves the candidates, and no round is fitted beside it)."""
         cap = self.settings.max_effects
         if len(pool) < 2 or (cap is not None and len(cur.names) + 2 > cap):
             return None
@@ -350,6 +358,12 @@ class Selector(Screening, Instants):
             rnd["candidates"].append(row)
             earns = row["earns"]
             if earns:
+                for name in (a.name, b.name):  # checked on entry as a single is (:meth:`forward`)
+                    why = self.refused_on_entry(sf, name)
+                    if why:
+                        rnd["refused"] = {"effect": name, "why": why, "pair": r["effect"]}
+                        self.refused_names.add(name)
+                        return REFUSED
                 names = [a.name, b.name] if sa <= sb else [b.name, a.name]  # the stronger alone first
                 rnd["chosen"] = "+".join(names)
                 return names, sf
