@@ -80,8 +80,8 @@ class _Given(Selector):
     def with_full_fit(self, sf):
         return sf, None
 
-    def refused_on_entry(self, sf, name):
-        return "negligible" if name in self.small else None
+    def refused_on_entry(self, sf, names):
+        return next(((n, "negligible") for n in names if n in self.small), None)
 
 
 LOAD, GAIN, SKEW = _Effect("load_torque", 7), _Effect("speed_sensor_gain", 4), _Effect("channel_delay", 1)

@@ -268,10 +268,10 @@ class Selector(Screening, Instants):
             if refitted:
                 rnd["refitted_from_screening"] = refitted
             rounds.append(rnd)
-            why = self.refused_on_entry(trials[best["effect"]], best["effect"]) if best["earns"] else None
-            if why:
-                rnd["refused"] = {"effect": best["effect"], "why": why}  # out now, not after the rounds beside it
-                self.refused_names.add(best["effect"])
+            out = self.refused_on_entry(trials[best["effect"]], [best["effect"]]) if best["earns"] else None
+            if out:
+                rnd["refused"] = {"effect": out[0], "why": out[1]}  # out now, not after the rounds beside it
+                self.refused_names.add(out[0])
                 continue
             if best["earns"]:
                 sf = trials[best["effect"]]
@@ -358,12 +358,11 @@ class Selector(Screening, Instants):
             rnd["candidates"].append(row)
             earns = row["earns"]
             if earns:
-                for name in (a.name, b.name):  # checked on entry as a single is (:meth:`forward`)
-                    why = self.refused_on_entry(sf, name)
-                    if why:
-                        rnd["refused"] = {"effect": name, "why": why, "pair": r["effect"]}
-                        self.refused_names.add(name)
-                        return REFUSED
+                out = self.refused_on_entry(sf, [a.name, b.name])  # checked on entry as a single is
+                if out:
+                    rnd["refused"] = {"effect": out[0], "why": out[1], "pair": r["effect"]}
+                    self.refused_names.add(out[0])
+                    return REFUSED
                 names = [a.name, b.name] if sa <= sb else [b.name, a.name]  # the stronger alone first
                 rnd["chosen"] = "+".join(names)
                 return names, sf
@@ -387,17 +386,22 @@ class Selector(Screening, Instants):
                     out[eff.name] = f"fitted on all data {why}"
         return out
 
-    def refused_on_entry(self, sf: SetFit, name: str) -> str | None:
-        """Why ``name``, about to enter with ``sf``, is refused on all data (:meth:`refused` of
-        ``sf`` fitted on all data, as the backward check would find it), or None: checked on entry
-        for effects that state their fitted size or are measured directly, so that no rounds are
-        fitted beside it."""
-        j = sf.model.effect_names.index(name)
-        eff = sf.model.effects[j]
-        if eff.realistic_share(sf.xs["A"][sf.model.slices[j]], self.ctx) is None and not eff.measured_directly(self.ctx):
+    def refused_on_entry(self, sf: SetFit, names) -> tuple[str, str] | None:
+        """The first of ``names``, about to enter with ``sf``, that is refused on all data, with
+        why (:meth:`refused` of ``sf`` fitted on all data once, as the backward check would find
+        it), or None: checked on entry for effects that state their fitted size or are measured
+        directly, so that no rounds are fitted beside it."""
+        def checked(name):
+            j = sf.model.effect_names.index(name)
+            eff = sf.model.effects[j]
+            return eff.realistic_share(sf.xs["A"][sf.model.slices[j]], self.ctx) is not None or eff.measured_directly(self.ctx)
+
+        names = [n for n in names if checked(n)]
+        if not names:
             return None
         full, x = self.with_full_fit(sf)
-        return self.refused(full, x).get(name)
+        why = self.refused(full, x)
+        return next(((n, why[n]) for n in names if n in why), None)
 
     def backward(self, cur: SetFit, base_fit: SetFit, band: float, progress=None, full_x=None):
         """The backward check (module docstring): an effect that does not earn its place against
