@@ -91,11 +91,21 @@ def _loads(c, t, w_mech, w_lag):
         env = _switched(t, c[29], c[30], c[42], c[43])
         share = c[41]
         t_pass += T_s * env * (1.0 - share)
-        if _armature(c):
-            t_dyn += T_s * env * share * w_lag
-        else:
-            t_dyn += T_s * env * share * w_mech / c[27]
+        u = w_lag if _armature(c) else w_mech / c[27]
+        t_dyn += T_s * env * share * _brake_law(u, c[45])
     return t_pass, t_dyn
+
+
+@compiled(_nrt=False, inline="always")
+def _brake_law(u, r):
+    """The switched load's speed share at speed ``u`` over ``w_ref``: ``u`` (a DC generator on
+    its resistor, ``r = 0``), or an eddy-current brake's ``u (1 + r^2) / (1 + (r u)^2)`` with
+    ``r`` = ``w_ref`` over its critical speed (Wouterse's law, 1 at ``w_ref``, its peak at the
+    critical speed)."""
+    if r == 0.0:
+        return u
+    ru = r * u
+    return u * (1.0 + r * r) / (1.0 + ru * ru)
 
 
 @compiled(_nrt=False, inline="always")

@@ -60,6 +60,7 @@ EXTENDED_FIELDS = (
     "tau_s",  # s, first-order rise (and fall) of the switched load and lag of its speed share (an armature); 0: t_rise
     "t_step_off",  # s, instant the switched load is switched off again (at or before t_step: never)
     "k_cubic",  # 1/rad^2, a hardening coupling's cubic term: torque k z (1 + k_cubic z^2) (0: linear spring)
+    "r_crit",  # -, w_ref over the critical speed of the switched load's speed share (an eddy-current brake); 0: linear
 )
 N_EXT = len(EXTENDED_FIELDS)
 IDX = {name: k for k, name in enumerate(EXTENDED_FIELDS)}
@@ -121,7 +122,7 @@ def valid_rows(rows: np.ndarray) -> np.ndarray:
         ok &= r[:, IDX[name]] > 0
     for name in ("R_r2", "R_r3", "g_fe", "ms_k", "ls_k", "U_d", "i_0", "h_th", "fv", "fc", "ms_k2", "T_L", "T_q", "T_s",
                  "t_rise", "J_l", "k_sh", "c_sh", "g_fe_s", "ls_floor", "backlash", "T_s_speed", "tau_s",
-                 "k_cubic"):
+                 "k_cubic", "r_crit"):
         ok &= r[:, IDX[name]] >= 0
     ok &= r[:, IDX["ls_floor"]] < 1
     ok &= r[:, IDX["t_split"]] >= 0

@@ -12,14 +12,19 @@ a fan). Beside the sensor and shaft effects of :mod:`benchmark.problems.timedoma
     ``dc_machine`` (a DC generator switched onto a resistor at ``step_fraction``: its torque
     ``k_e i_a`` follows its armature circuit, ``T u`` with ``u`` the speed over ``w_sync``
     through the first-order lag of the armature's time constant ``tau``, s, ``L_a/R_a``; on at
-    ``step_fraction``, it may be switched off at ``off_fraction``). One augmentation fits all
-    four: extras ``load_const``, ``load_quad``, ``load_step`` (over the torque scale, each
-    within 0-1.5), ``load_step_time`` (fraction of the record), ``load_step_speed`` (share of
-    the switched load proportional to speed),
+    ``step_fraction``, it may be switched off at ``off_fraction``), ``eddy_brake`` (an
+    eddy-current brake excited at ``step_fraction`` through its field's lag ``tau``, s: Wouterse's
+    law ``2 T_k x / (1 + x^2)``, ``x`` the speed over the critical speed, the torque at ``w_sync``
+    the size; ``critical`` the critical speed over ``w_sync``, 0.2-2 on real brakes). One
+    augmentation fits all five: extras ``load_const``, ``load_quad``, ``load_step`` (over the
+    torque scale, each within 0-1.5), ``load_step_time`` (fraction of the record),
+    ``load_step_speed`` (share of the switched load that follows speed),
     ``load_step_tau`` (its first-order rise, s, from one sample: abrupt enough to excite a
     coupling resonance as a real step does, smooth enough for its instant to be fitted between
-    samples) and ``load_step_off`` (its switch-off, fraction of the record; never when at or
-    before the switch-on).
+    samples), ``load_step_off`` (its switch-off, fraction of the record; never when at or
+    before the switch-on) and ``load_step_crit`` (``w_sync`` over the critical speed of the
+    speed share's law, 0-5: 0 is a DC generator's torque proportional to speed, above 0 an
+    eddy-current brake's, whose torque peaks at the critical speed and falls beyond it).
 """
 
 from __future__ import annotations
@@ -41,12 +46,13 @@ class LoadTorque(Effect):
     size_name = "torque_over_T_acc"
     realistic = (0.05, 0.6)
     extra_names = ("load_const", "load_quad", "load_step", "load_step_time", "load_step_speed", "load_step_tau",
-                   "load_step_off")
+                   "load_step_off", "load_step_crit")
     extra_units = ("p.u. of torque scale", "p.u. of torque scale at w_sync", "p.u. of torque scale",
-                   "fraction of record", "fraction of switched load", "s", "fraction of record")
+                   "fraction of record", "fraction of switched load", "s", "fraction of record",
+                   "w_sync over critical speed")
     physics = ("a load torque: constant, ~speed^2, or switched on (and off) at unknown instants through a "
-               "first-order rise, in part proportional to speed through the same lag (a DC machine's armature "
-               "circuit)")
+               "first-order rise, in part following speed through the same lag (a DC machine's armature "
+               "circuit; an eddy-current brake's law, peaking at its critical speed)")
     shows_in = "steady slip and current rise over a window; a speed dip"
     FORM_DRAWS = [{"kind": "constant"}, {"kind": "quadratic"}, {"kind": "step", "step_fraction": [0.3, 0.7]},
                   {"kind": "dc_machine", "step_fraction": [0.3, 0.6], "tau": [0.01, 0.06]}]
@@ -55,6 +61,12 @@ class LoadTorque(Effect):
     MAX_RISE = 0.2
     #: Rise time constant, s, a DC generator's starts begin at (the middle of its 5-100 ms).
     DC_RISE_START = 0.02
+    #: Slowest critical speed of an eddy-current brake over ``w_sync`` (0.2-2 on real brakes,
+    #: Wouterse 1991): ``load_step_crit`` within 0 to its inverse.
+    SLOWEST_CRITICAL = 0.2
+    #: An eddy-current brake's start: its field's rise, s (20-200 ms), and ``load_step_crit``
+    #: (``w_sync`` at 1.5 times the critical speed, within the 0.5-5 of real brakes).
+    BRAKE_START = (0.05, 1.5)
 
     def plant(self, row, size, ctx, form=None):
         form = {**self.form, **(form or {})}
@@ -66,42 +78,49 @@ class LoadTorque(Effect):
         elif kind == "quadratic":
             row[IDX["T_q"]] = T
             row[IDX["w_ref"]] = ctx.w_sync
-        elif kind in ("step", "dc_machine"):
+        elif kind in ("step", "dc_machine", "eddy_brake"):
             row[IDX["T_s"]] = T
             row[IDX["t_step"]] = float(form.get("step_fraction", 0.5)) * ctx.record_duration
             row[IDX["t_rise"]] = 0.0
-            if kind == "dc_machine":  # a DC generator on a resistor: T = T_s (w/w_sync), its armature's rise
+            if kind in ("dc_machine", "eddy_brake"):  # T = T_s (w/w_sync), its armature's (field's) rise
                 row[IDX["w_ref"]] = ctx.w_sync
+                if kind == "eddy_brake":
+                    row[IDX["r_crit"]] = 1.0 / float(form.get("critical", 1.0))
                 row[IDX["T_s_speed"]] = 1.0
                 row[IDX["tau_s"]] = float(form.get("tau", 0.03))
                 off = form.get("off_fraction")
                 row[IDX["t_step_off"]] = 0.0 if off is None else float(off) * ctx.record_duration
         else:
-            raise ValueError(f"load_torque: kind must be constant, quadratic, step or dc_machine, got {kind!r}")
+            raise ValueError(f"load_torque: kind must be constant, quadratic, step, dc_machine or eddy_brake, "
+                             f"got {kind!r}")
         return row
 
     def extra_bounds(self, ctx):
         """Torques over the torque scale (0-1.5: a motor cannot drive much more than its rated
         torque), the switch-on instant (fraction of the record), the share of the switched load
-        that follows speed (0-1), its rise time constant (one sample to :data:`MAX_RISE`, s) and
-        the switch-off instant (fraction of the record; at or before the switch-on: never)."""
+        that follows speed (0-1), its rise time constant (one sample to :data:`MAX_RISE`, s), the
+        switch-off instant (fraction of the record; at or before the switch-on: never) and its law's
+        ``w_sync`` over the critical speed (0 to 1 / :data:`SLOWEST_CRITICAL`)."""
         ts = max(ctx.sample_time, 1e-6)
-        return (np.array([0.0, 0.0, 0.0, 0.02, 0.0, ts, 0.02]),
-                np.array([1.5, 1.5, 1.5, 0.98, 1.0, max(self.MAX_RISE, 2 * ts), 1.0]))
+        return (np.array([0.0, 0.0, 0.0, 0.02, 0.0, ts, 0.02, 0.0]),
+                np.array([1.5, 1.5, 1.5, 0.98, 1.0, max(self.MAX_RISE, 2 * ts), 1.0, 1.0 / self.SLOWEST_CRITICAL]))
 
     def extra_starts(self, ctx):
         ts = max(ctx.sample_time, 1e-6)
-        starts = [np.array([0.1, 0.1, 0.0, 0.5, 0.0, ts, 1.0])]
-        starts += [np.array([0.0, 0.0, 0.2, t, 0.0, ts, 1.0]) for t in (0.35, 0.65, 0.85)]
+        starts = [np.array([0.1, 0.1, 0.0, 0.5, 0.0, ts, 1.0, 0.0])]
+        starts += [np.array([0.0, 0.0, 0.2, t, 0.0, ts, 1.0, 0.0]) for t in (0.35, 0.65, 0.85)]
+        rise, crit = self.BRAKE_START  # an eddy-current brake excited with the start
+        starts.append(np.array([0.0, 0.0, 0.2, 0.02, 1.0, rise, 1.0, crit]))
         change = ctx.load_change
         if change is not None:  # a step where the current envelope jumps: the first start (the screening's)
             lo, hi = self.extra_bounds(ctx)
             on = float(np.clip(change / ctx.record_duration, lo[3], hi[3]))
-            starts.insert(0, np.array([0.0, 0.0, 0.2, on, 0.0, ts, 1.0]))
-            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, self.DC_RISE_START, 1.0]))  # a DC machine loaded there
+            starts.insert(0, np.array([0.0, 0.0, 0.2, on, 0.0, ts, 1.0, 0.0]))
+            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, self.DC_RISE_START, 1.0, 0.0]))  # a DC machine loaded there
+            starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, rise, 1.0, crit]))  # ... an eddy brake excited there
             if ctx.load_release is not None:  # ... and switched off where the envelope falls most
                 off = float(np.clip(ctx.load_release / ctx.record_duration, on, 1.0))
-                starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, self.DC_RISE_START, off]))
+                starts.append(np.array([0.0, 0.0, 0.2, on, 1.0, self.DC_RISE_START, off, 0.0]))
         return starts
 
     def starts_from_base(self, base, ctx):
@@ -165,6 +184,7 @@ class LoadTorque(Effect):
         rows[:, IDX["T_s_speed"]] = extras[:, 4]
         rows[:, IDX["tau_s"]] = extras[:, 5]
         rows[:, IDX["t_step_off"]] = extras[:, 6] * ctx.record_duration
+        rows[:, IDX["r_crit"]] = extras[:, 7] if extras.shape[1] > 7 else 0.0
         return rows
 
     def describe_fit(self, extras, ctx, base=None):
@@ -173,4 +193,5 @@ class LoadTorque(Effect):
         return {"constant_Nm": float(x[0] * ctx.torque_scale), "quadratic_at_sync_Nm": float(x[1] * ctx.torque_scale),
                 "switched_Nm": float(x[2] * ctx.torque_scale), "switched_on_s": float(x[3] * ctx.record_duration),
                 "switched_share_following_speed": float(x[4]), "switched_rise_s": float(x[5]),
-                "switched_off_s": off}
+                "switched_off_s": off,
+                "critical_speed_over_w_sync": float(1.0 / x[7]) if len(x) > 7 and x[7] > 0 else None}

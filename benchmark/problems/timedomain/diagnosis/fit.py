@@ -307,12 +307,13 @@ class JointModel:
         plus the passive load torques (constant, and the switched load's constant part as it
         stands at the start-up's end, :func:`switched_at_end`), ``B = fv`` plus the switched
         load's part that follows speed (a DC generator still on its resistor, through its armature's
-        lag ``tau_s``), ``C`` a fan load over ``w_ref^2``."""
+        lag ``tau_s``; an eddy-current brake's law when ``r_crit`` > 0, integrated), ``C`` a fan
+        load over ``w_ref^2``."""
         d = self.data
         theta = self.full_parameters(X)
         J, fv = theta[:, 4:5], theta[:, 5:6]
         col = {k: rows[:, [IDX[k]]] if k in IDX else np.zeros((len(X), 1))
-               for k in ("fc", "T_L", "T_q", "w_ref", "T_s", "t_step", "T_s_speed", "tau_s", "t_step_off")}
+               for k in ("fc", "T_L", "T_q", "w_ref", "T_s", "t_step", "T_s_speed", "tau_s", "t_step_off", "r_crit")}
         fc = np.where(np.isfinite(col["fc"]), col["fc"], theta[:, 6:7])  # an effect may set fc
         step_on = switched_at_end(col, float(d.t[-1]))
         A = fc + col["T_L"] + col["T_s"] * step_on * (1.0 - col["T_s_speed"])
@@ -320,7 +321,8 @@ class JointModel:
         fv = fv + B_a
         with np.errstate(all="ignore"):
             C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
-        return FreeCoast(d.stop_t, J, fv, A, C, B_a, col["tau_s"])  # its armature's lag (tau_s > 0)
+        return FreeCoast(d.stop_t, J, fv, A, C, B_a, col["tau_s"],  # its armature's lag (tau_s > 0)
+                         col["r_crit"], col["w_ref"])  # an eddy-current brake's law (r_crit > 0)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
         return self.residuals_of(self.simulate(X), overwrite=True)

@@ -13,6 +13,12 @@ speed is the sum of two exponentials of the system's eigenvalues (complex where 
 "electrical spring" and the inertia oscillate), from ``g = B_a w`` at the coast's start (the
 record ends in a steady state). With a fan load as well the lag is left out.
 
+An eddy-current brake still excited brakes with ``B_a w_ref h(u)``, ``h(u) = u (1 + r^2) / (1 +
+(r u)^2)`` of its speed ``u`` over ``w_ref`` (through the same lag, ``r`` = ``w_ref`` over its
+critical speed): the coast has no closed form, and :func:`_brake_coast` integrates it (Heun's
+method on the record's own samples, sub-stepped to a tenth of the mechanical time constant and
+half the lag's, the lag itself exponential over each sub-step).
+
 The profiled start of the coast (:meth:`benchmark.problems.timedomain.diagnosis.fit.JointModel.recorded_stop`)
 evaluates the coast of the same rows from three starting speeds; :class:`FreeCoast` computes
 what does not depend on the start (the decay ``exp(-t/tau)`` over the whole record, the
@@ -22,6 +28,8 @@ evaluating the closed form afresh (the same numbers, bit for bit).
 """
 
 from __future__ import annotations
+
+import math
 
 import numba
 import numpy as np
@@ -34,8 +42,19 @@ class FreeCoast:
     ``tau_a`` (n, 1), s (None or 0: none)."""
 
     def __init__(self, t: np.ndarray, J: np.ndarray, fv: np.ndarray, A: np.ndarray, C: np.ndarray,
-                 B_a: np.ndarray | None = None, tau_a: np.ndarray | None = None):
+                 B_a: np.ndarray | None = None, tau_a: np.ndarray | None = None,
+                 r_crit: np.ndarray | None = None, w_ref: np.ndarray | None = None):
         self.t = np.asarray(t, float)[None, :]
+        self.brake = np.zeros(len(J), bool)  # an eddy-current brake's law: integrated (r_crit > 0)
+        if B_a is not None and r_crit is not None and w_ref is not None:
+            self.brake = (B_a[:, 0] > 0) & (r_crit[:, 0] > 0)
+            if np.any(self.brake):
+                m = self.brake
+                tau_b = np.zeros_like(J[m]) if tau_a is None else tau_a[m]
+                self.brake_terms = tuple(np.ascontiguousarray(v[:, 0], dtype=float) for v in
+                                         (J[m], fv[m] - B_a[m], A[m], C[m], B_a[m] * w_ref[m], w_ref[m], r_crit[m],
+                                          tau_b))
+                B_a = np.where(self.brake[:, None], 0.0, B_a)  # the closed forms below leave these rows alone
         with np.errstate(all="ignore"):
             self.tau = J / fv
             self.c = A / J
@@ -68,6 +87,9 @@ class FreeCoast:
                 w[self.fan] = np.real((-fvf + q * np.tan(phi0 - self.turn)) / (2 * Cf))
             if np.any(self.armature):
                 w[self.armature] = self.lagged.speed(w0[self.armature])
+            if np.any(self.brake):
+                w[self.brake] = _brake_coast(self.t[0], np.ascontiguousarray(w0[self.brake, 0], dtype=float),
+                                             *self.brake_terms)
         return at_rest_once_stopped(w)
 
 
@@ -127,4 +149,45 @@ def _decayed(w0, offset, decay):
         a = w0[r] + offset[r]
         for k in range(m):
             w[r, k] = a * decay[r, k] - offset[r]
+    return w
+
+
+@numba.njit(cache=True, nogil=True)
+def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
+    """Speed (n, N) of the coast ``J w' = -(A + fv w + C w^2 + T_b h(u))`` at times ``t`` (N,)
+    from ``w0`` (n,), ``u`` the speed over ``w_ref`` through a first-order lag ``tau`` (0: none)
+    starting at ``w0 / w_ref``, ``h(u) = u (1 + r^2) / (1 + (r u)^2)``; 0 once stopped (each
+    argument but ``t`` an (n,) column of the rows)."""
+    n, m = len(w0), len(t)
+    w = np.zeros((n, m))
+    dt_max = 0.0
+    for j in range(1, m):
+        dt_max = max(dt_max, t[j] - t[j - 1])
+    for k in range(n):
+        x, ul = w0[k], w0[k] / w_ref[k]
+        rr, inv_J, inv_w = r[k] * r[k], 1.0 / J[k], 1.0 / w_ref[k]
+        gain = T_b[k] * (1.0 + rr)
+        lag = tau[k] > 0.0
+        rate = (fv[k] + gain * inv_w + 2.0 * C[k] * max(x, 0.0)) * inv_J  # the fastest mechanical rate
+        sub = max(1, int(math.ceil(10.0 * dt_max * rate)))
+        if lag:
+            sub = max(sub, int(math.ceil(2.0 * dt_max / tau[k])))
+        sub = min(sub, 200)
+        w[k, 0] = x
+        for j in range(1, m):
+            if not x > 0.0:
+                break
+            h = (t[j] - t[j - 1]) / sub
+            a = math.exp(-h / tau[k]) if lag else 0.0
+            for _ in range(sub):
+                u0 = ul if lag else x * inv_w
+                d0 = -(A[k] + fv[k] * x + C[k] * x * x + gain * u0 / (1.0 + rr * u0 * u0)) * inv_J
+                xp = x + h * d0
+                u1 = (ul * a + xp * inv_w * (1.0 - a)) if lag else xp * inv_w
+                d1 = -(A[k] + fv[k] * xp + C[k] * xp * xp + gain * u1 / (1.0 + rr * u1 * u1)) * inv_J
+                x_new = x + 0.5 * h * (d0 + d1)
+                if lag:
+                    ul = ul * a + 0.5 * (x + x_new) * inv_w * (1.0 - a)
+                x = x_new
+            w[k, j] = x
     return w

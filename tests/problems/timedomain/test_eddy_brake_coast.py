@@ -1,0 +1,57 @@
+"""The free coast with an eddy-current brake still excited: no closed form, integrated by
+``free_coast._brake_coast``; checked against SciPy's adaptive integrator, and the load's
+``load_step_crit`` reaching the rows and the kernel's law."""
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
+from benchmark.problems.timedomain.extended_rows import IDX
+from benchmark.problems.timedomain.load_effect import LoadTorque
+
+W_REF, J, FV, A, B_A, R = 157.0, 0.05, 0.001, 0.2, 0.02, 2.0
+
+
+def _reference(t, w0, tau):
+    T_b = B_A * W_REF
+
+    def f(_, y):
+        u = y[1] if tau > 0 else y[0] / W_REF
+        d = -(A + FV * y[0] + T_b * u * (1 + R * R) / (1 + (R * u) ** 2)) / J
+        return [d, (y[0] / W_REF - y[1]) / tau if tau > 0 else 0.0]
+
+    sol = solve_ivp(f, (0, t[-1]), [w0, w0 / W_REF], t_eval=t, rtol=1e-10, atol=1e-10,
+                    events=lambda _, y: y[0])
+    w = np.zeros_like(t)
+    w[: sol.y.shape[1]] = np.clip(sol.y[0], 0.0, None)
+    return w
+
+
+def test_the_brakes_coast_follows_its_law_with_and_without_the_fields_lag():
+    t = np.arange(0.0, 5.0, 1e-3)
+    col = lambda v: np.full((2, 1), v)  # noqa: E731
+    coast = FreeCoast(t, col(J), col(FV + B_A), col(A), col(0.0), col(B_A), np.array([[0.0], [0.05]]),
+                      col(R), col(W_REF))
+    w = coast.speed(col(150.0))
+    for k, tau in enumerate((0.0, 0.05)):
+        ref = _reference(t, 150.0, tau)
+        moving = ref > 1.0
+        assert np.max(np.abs(w[k, moving] - ref[moving])) < 2e-4  # rad/s, of 150
+    # the brake's torque peaks at its critical speed (W_REF / R) below W_REF: below W_REF it brakes
+    # more than the linear law of the same torque at W_REF, and the coast stops sooner
+    linear = FreeCoast(t, col(J), col(FV + B_A), col(A), col(0.0), col(B_A), col(0.0)).speed(col(150.0))
+    assert 2.5 < t[np.argmax(w[0] <= 0)] < 3.5 and linear[0, -1] > 5.0  # stopped near 3 s, the linear still turns
+    assert np.all(w[0, 1:200] < linear[0, 1:200])
+
+
+def test_the_brakes_critical_speed_reaches_the_rows():
+    class Ctx:
+        torque_scale, record_duration, sample_time, w_sync = 10.0, 1.0, 1e-4, 157.0
+
+    load = LoadTorque()
+    lo, hi = load.extra_bounds(Ctx)
+    assert len(lo) == len(load.extra_names) == 8 and hi[7] == 5.0  # critical speed down to 0.2 w_sync
+    extras = np.array([[0.0, 0.0, 0.3, 0.5, 1.0, 0.05, 1.0, 2.5]])
+    rows = load.augment(np.zeros((1, len(IDX))), extras, Ctx)
+    assert rows[0, IDX["r_crit"]] == 2.5 and rows[0, IDX["T_s"]] == 3.0
+    assert load.describe_fit(extras, Ctx)["critical_speed_over_w_sync"] == 0.4
