@@ -34,6 +34,8 @@ import math
 import numba
 import numpy as np
 
+from benchmark.problems.timedomain.extended import _brake_law
+
 
 class FreeCoast:
     """The coast of ``n`` rows at times ``t`` (N,) s from the supply's removal: ``J``, ``fv``,
@@ -156,7 +158,7 @@ def _decayed(w0, offset, decay):
 def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
     """Speed (n, N) of the coast ``J w' = -(A + fv w + C w^2 + T_b h(u))`` at times ``t`` (N,)
     from ``w0`` (n,), ``u`` the speed over ``w_ref`` through a first-order lag ``tau`` (0: none)
-    starting at ``w0 / w_ref``, ``h(u) = u (1 + r^2) / (1 + (r u)^2)``; 0 once stopped (each
+    starting at ``w0 / w_ref``, ``h`` the kernel's law (``extended._brake_law``); 0 once stopped (each
     argument but ``t`` an (n,) column of the rows)."""
     n, m = len(w0), len(t)
     w = np.zeros((n, m))
@@ -165,10 +167,10 @@ def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
         dt_max = max(dt_max, t[j] - t[j - 1])
     for k in range(n):
         x, ul = w0[k], w0[k] / w_ref[k]
-        rr, inv_J, inv_w = r[k] * r[k], 1.0 / J[k], 1.0 / w_ref[k]
-        gain = T_b[k] * (1.0 + rr)
+        inv_J, inv_w = 1.0 / J[k], 1.0 / w_ref[k]
         lag = tau[k] > 0.0
-        rate = (fv[k] + gain * inv_w + 2.0 * C[k] * max(x, 0.0)) * inv_J  # the fastest mechanical rate
+        # the fastest mechanical rate: the law's slope is at most (1 + r^2) at u = 0
+        rate = (fv[k] + T_b[k] * (1.0 + r[k] * r[k]) * inv_w + 2.0 * C[k] * max(x, 0.0)) * inv_J
         sub = max(1, int(math.ceil(10.0 * dt_max * rate)))
         if lag:
             sub = max(sub, int(math.ceil(2.0 * dt_max / tau[k])))
@@ -181,10 +183,10 @@ def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
             a = math.exp(-h / tau[k]) if lag else 0.0
             for _ in range(sub):
                 u0 = ul if lag else x * inv_w
-                d0 = -(A[k] + fv[k] * x + C[k] * x * x + gain * u0 / (1.0 + rr * u0 * u0)) * inv_J
+                d0 = -(A[k] + fv[k] * x + C[k] * x * x + T_b[k] * _brake_law(u0, r[k])) * inv_J
                 xp = x + h * d0
                 u1 = (ul * a + xp * inv_w * (1.0 - a)) if lag else xp * inv_w
-                d1 = -(A[k] + fv[k] * xp + C[k] * xp * xp + gain * u1 / (1.0 + rr * u1 * u1)) * inv_J
+                d1 = -(A[k] + fv[k] * xp + C[k] * xp * xp + T_b[k] * _brake_law(u1, r[k])) * inv_J
                 x_new = x + 0.5 * h * (d0 + d1)
                 if lag:
                     ul = ul * a + 0.5 * (x + x_new) * inv_w * (1.0 - a)

@@ -394,7 +394,8 @@ class Selector(Screening, Instants):
         def checked(name):
             j = sf.model.effect_names.index(name)
             eff = sf.model.effects[j]
-            return eff.realistic_share(sf.xs["A"][sf.model.slices[j]], self.ctx) is not None or eff.measured_directly(self.ctx)
+            return (eff.realistic_share(sf.xs["A"][sf.model.slices[j]], self.ctx) is not None
+                    or eff.measured_directly(self.ctx))
 
         names = [n for n in names if checked(n)]
         if not names:
