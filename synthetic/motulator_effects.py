@@ -40,7 +40,14 @@ held-out forms, written here on motulator's own classes:
     the brake's torque-speed law with its critical speed ``w_k`` (Wouterse, IEE Proc. B
     138(4), 1991) times the square of the excitation current rising with the field's time
     constant ``tau_f``; ``T_k`` so that the steady torque at synchronous speed is the drawn
-    load torque (as the independent plant's ``eddy_brake``).
+    load torque (as the independent plant's ``eddy_brake``). Retired from the held-out forms:
+    the diagnosis's load has the brake's law since.
+``battery_charger`` (load_torque)
+    A permanent-magnet generator on the shaft (the load side of a two-mass shaft) charging a
+    battery through a diode bridge, connected at ``time``: no current below the cut-in speed
+    ``w_c`` (the battery's voltage plus the diodes' drop), then ``T = T_L (|w| - w_c)/(w_sync - w_c)``
+    (as the independent plant's ``battery_charger``); ``w_c`` a share ``cut_in_ratio`` of
+    synchronous speed, ``T_L`` the drawn load torque.
 
 There are no held-out forms for the effects motulator does not inject (every other effect
 of the catalogue): the motulator source only offers these three.
@@ -200,6 +207,32 @@ def brake(torque: float, w_sync: float, critical_speed_ratio: float, field_time_
     return {"T_k": torque * (1 + q * q) / (2 * q), "w_k": w_k, "tau_f": field_time_constant, "time": time}
 
 
+def charger_class(base):
+    """motulator's mechanics class ``base`` with a battery charger on the load side."""
+
+    class ChargerLoaded(base):
+        def __init__(self, *args, charger: dict, **kw):
+            super().__init__(*args, **kw)
+            self.charger = charger
+
+        def set_outputs(self, t):
+            super().set_outputs(t)
+            c = self.charger
+            w = np.real(self.out.w_L if hasattr(self.out, "w_L") else self.out.w_M)
+            over = max(abs(w) - c["w_c"], 0.0) if t >= c["time"] else 0.0
+            self.out.tau_L_tot = self.out.tau_L_tot + np.sign(w) * c["T_L"] * over / (c["w_sync"] - c["w_c"])
+
+    return ChargerLoaded
+
+
+def charger(torque: float, w_sync: float, cut_in_ratio: float, time: float) -> dict:
+    """The battery charger of a drawn ``battery_charger`` load: ``torque`` (N m) at ``w_sync``
+    (mechanical rad/s), cut-in speed ``cut_in_ratio`` times ``w_sync``, connected at ``time`` (s)."""
+    if not 0.0 <= cut_in_ratio < 1.0:
+        raise ValueError(f"load_torque: cut_in_ratio must be in [0, 1), got {cut_in_ratio}")
+    return {"T_L": torque, "w_c": cut_in_ratio * w_sync, "w_sync": w_sync, "time": time}
+
+
 def effect_specs(effects: dict | None, m: dict, exc: dict, duration: float) -> list[dict]:
     """Validate the requested effects and fill in their defaults (sizes and forms)."""
     out = []
@@ -260,8 +293,11 @@ def effect_specs(effects: dict | None, m: dict, exc: dict, duration: float) -> l
             if kind == "eddy_brake":
                 form["brake"] = brake(float(torque), w_sync, float(opts.get("critical_speed_ratio", 0.6)),
                                       float(opts.get("field_time_constant", 0.05)), form["time"])
+            if kind == "battery_charger":
+                form["charger"] = charger(float(torque), w_sync, float(opts.get("cut_in_ratio", 0.5)), form["time"])
             size_name = ("steady generator torque at synchronous speed" if kind == "dc_generator"
                          else "steady brake torque at synchronous speed" if kind == "eddy_brake"
+                         else "charging torque at synchronous speed" if kind == "battery_charger"
                          else "load torque (at synchronous speed for quadratic)")
             out.append({"name": name, "size": float(torque), "size_name": size_name, "unit": "N m", "form": form,
                         **held})
@@ -277,7 +313,7 @@ def mechanics(mt: dict, m: dict, eff: dict, exc: dict, stop_at: float | None = N
     fv, fc, eps = par["fv"], par["fc"], COULOMB_SMOOTHING
     load, k_quad, fc_load = eff.get("load_torque"), 0.0, 0.0
     tau_L = lambda t: 0 * np.asarray(t)  # noqa: E731
-    gen = brk = None
+    gen = brk = chg = None
     if load is not None and load["form"]["form"] == "dc_generator":
         gen = dict(load["form"]["generator"])
         if stop_at is not None:  # the stop's clock starts at zero: a generator switched on stays on
@@ -287,6 +323,11 @@ def mechanics(mt: dict, m: dict, eff: dict, exc: dict, stop_at: float | None = N
         brk = dict(load["form"]["brake"])
         if stop_at is not None:  # the stop's clock starts at zero: the excitation goes on rising
             brk["time"] -= stop_at
+        load = None
+    if load is not None and load["form"]["form"] == "battery_charger":
+        chg = dict(load["form"]["charger"])
+        if stop_at is not None:  # the stop's clock starts at zero: a charger connected stays connected
+            chg["time"] = 0.0 if chg["time"] <= stop_at else chg["time"] - stop_at
         load = None
     if load is not None:
         T, t0 = load["form"]["torque"], load["form"]["time"]
@@ -301,10 +342,15 @@ def mechanics(mt: dict, m: dict, eff: dict, exc: dict, stop_at: float | None = N
         return fv + (fc + fc_load) / np.maximum(a, eps) + k_quad * a
 
     tm = eff.get("two_mass")
-    extra = {"generator": gen} if gen is not None else {"brake": brk} if brk is not None else {}
+    extra = ({"generator": gen} if gen is not None else {"brake": brk} if brk is not None
+             else {"charger": chg} if chg is not None else {})
 
     def loaded(cls):
-        return generator_class(cls) if gen is not None else eddy_brake_class(cls) if brk is not None else cls
+        if gen is not None:
+            return generator_class(cls)
+        if brk is not None:
+            return eddy_brake_class(cls)
+        return charger_class(cls) if chg is not None else cls
 
     if tm is None:
         return loaded(mt["model"].StiffMechanicalSystem)(J=par["J"], B_L=B_L, tau_L=tau_L, **extra)

@@ -29,8 +29,9 @@ friction coefficient ``B_L(|w|) = fv + fc/max(|w|, eps)`` (``eps`` = :data:`COUL
 Held-out forms (for scoring only, :mod:`synthetic.motulator_effects`; option ``form``):
 ``main_saturation`` ``steel_gap`` (gap plus M800-50A iron), ``two_mass`` ``slip_clutch``
 (a torque limiter slipping in series with the coupling; ``elastomer``, a progressive coupling, is retired
-from them), ``load_torque`` ``eddy_brake`` (an eddy-current brake with its excitation's rise; ``dc_generator``,
-a DC generator with its armature circuit as an extra state, is retired from them).
+from them), ``load_torque`` ``battery_charger`` (a permanent-magnet generator charging a battery through diodes:
+no torque below its cut-in speed; ``eddy_brake``, an eddy-current brake with its excitation's rise,
+and ``dc_generator``, a DC generator with its armature circuit as an extra state, are retired from them).
 """
 
 from __future__ import annotations
@@ -310,9 +311,11 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
         with ``hardening``), ``load_torque`` (``form``: ``step``, an
         active torque from ``time`` s; ``constant``, a passive motion-opposing torque from the
         start; ``quadratic``, ``k*w**2`` reaching ``torque`` at synchronous speed; held out,
-        ``eddy_brake`` excited at ``time`` s, ``critical_speed_ratio`` (its critical speed over
+        ``battery_charger`` connected at ``time`` s with a cut-in speed ``cut_in_ratio`` times
+        synchronous speed, ``torque`` its torque at synchronous speed; retired, ``eddy_brake``
+        excited at ``time`` s, ``critical_speed_ratio`` (its critical speed over
         synchronous speed) and ``field_time_constant`` s, ``torque`` its steady torque at
-        synchronous speed; retired, ``dc_generator`` closed at ``time`` s with ``emf`` V at
+        synchronous speed; ``dc_generator`` closed at ``time`` s with ``emf`` V at
         synchronous speed, ``armature_time_constant`` s and ``brush_drop`` V, ``torque`` its
         steady torque at synchronous speed; ``torque`` N m or ``size`` fraction of rated torque,
         default 0.5).
@@ -396,6 +399,7 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
         if "load_torque" in eff and eff["load_torque"]["form"]["form"] == "eddy_brake":
             b = eff["load_torque"]["form"]["brake"]
             coast["fv"] += 2 * b["T_k"] / b["w_k"]  # the brake at low speed: its slope there, fully excited
+        # a battery charger adds nothing: it stops braking below its cut-in speed (a longer, safe estimate)
         ns = int(round(_coast_time(coast, abs(w0), stop_max_duration) / Tq)) + 1
         mech_state = {k: getattr(mech.data, k)[-1] for k in vars(mech.sol_states)}
         mech2 = mechanics(mt, m, eff, exc, stop_at=duration)

@@ -208,7 +208,7 @@ def motulator_options(rng: np.random.Generator, name: str, forms: str, duration:
     opts = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
     if form == "step":
         opts["time"] = float(rng.uniform(0.3, 0.6) * duration)
-    if form in ("dc_generator", "eddy_brake"):  # switched on at the start or later, with equal odds
+    if form in ("dc_generator", "eddy_brake", "battery_charger"):  # on at the start or later, with equal odds
         opts["time"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.6) * duration)
     if form == "dc_generator":
         opts.update(armature_time_constant=float(np.exp(rng.uniform(np.log(2e-3), np.log(2e-2)))),
@@ -216,6 +216,8 @@ def motulator_options(rng: np.random.Generator, name: str, forms: str, duration:
     if form == "eddy_brake":
         opts.update(critical_speed_ratio=float(np.exp(rng.uniform(np.log(0.2), np.log(2.0)))),
                     field_time_constant=float(np.exp(rng.uniform(np.log(0.02), np.log(0.2)))))
+    if form == "battery_charger":
+        opts["cut_in_ratio"] = float(rng.uniform(0.3, 0.8))
     return opts
 
 

@@ -39,10 +39,12 @@ per sample); held-out forms marked (h):
 * ``load_torque`` (``constant``, ``quadratic``, ``step`` at 30-70 % of the record;
   ``dc_generator`` (retired from the held-out forms): armature time constant 2-20 ms, EMF
   100-250 V at synchronous speed, brush drop 1-2 V, armature closed at the start or at 30-70 %
-  of the record; (h) ``eddy_brake``: an eddy-current brake, critical speed 0.2-2 x synchronous
-  (log-uniform), field time constant 20-200 ms (log-uniform), excited at the start or at
-  30-70 % of the record): size = ``T_L/T_n`` (the generator's and the brake's: their steady
-  torque at synchronous speed), 0.1-1.0.
+  of the record; ``eddy_brake`` (retired from the held-out forms): an eddy-current brake,
+  critical speed 0.2-2 x synchronous (log-uniform), field time constant 20-200 ms
+  (log-uniform), excited at the start or at 30-70 % of the record; (h) ``battery_charger``: a
+  permanent-magnet generator charging a battery through a diode bridge, cut-in speed 0.3-0.8 x
+  synchronous, connected at the start or at 30-70 % of the record): size = ``T_L/T_n`` (the
+  generator's, the brake's and the charger's: their steady torque at synchronous speed), 0.1-1.0.
 * ``two_mass`` (``spring``, ``backlash`` of 0.1-0.5 deg; ``elastomer`` (retired from the
   held-out forms): stiffness 1.5-3 x harder at rated torque; (h) ``slip_clutch``: a
   friction torque limiter in series with the spring, slipping at 0.7-1.8 x the rated torque (set to
@@ -286,6 +288,10 @@ class InverterDrop(Effect):
                                            i_knee=0.01 * In, i_transition=i_c)
 
 
+#: Load forms switched on at the start or at 30-70 % of the record, with equal odds.
+SWITCHED_LOADS = ("dc_generator", "eddy_brake", "battery_charger")
+
+
 class LoadTorque(Effect):
     name, unit = "load_torque", "fraction of rated torque"
 
@@ -293,7 +299,7 @@ class LoadTorque(Effect):
         spec = {"size": float(rng.uniform(0.1, 1.0))}
         if form == "step":
             spec["step_fraction"] = float(rng.uniform(0.3, 0.7))
-        if form in ("dc_generator", "eddy_brake"):  # switched on at the start or later, with equal odds
+        if form in SWITCHED_LOADS:  # switched on at the start or later, with equal odds
             spec["step_fraction"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.7))
         if form == "dc_generator":
             spec.update(armature_time_constant=log_uniform(rng, 2e-3, 2e-2), emf=float(rng.uniform(100.0, 250.0)),
@@ -301,6 +307,8 @@ class LoadTorque(Effect):
         if form == "eddy_brake":
             spec.update(critical_speed_ratio=log_uniform(rng, 0.2, 2.0),
                         field_time_constant=log_uniform(rng, 0.02, 0.2))
+        if form == "battery_charger":
+            spec["cut_in_ratio"] = float(rng.uniform(0.3, 0.8))
         return spec
 
     def _apply(self, build, spec):
@@ -308,7 +316,7 @@ class LoadTorque(Effect):
         t_step = float(spec.get("step_fraction", 0.0)) * build.duration + getattr(build.scenario, "pre_trigger", 0.0)
         TL = spec["size"] * mo.rated_torque
         mech = replace(build.plant["mechanics"], load=spec["form"], load_torque=TL, w_ref=mo.w_sync, t_step=t_step)
-        out = {"load_torque": TL, "t_step": t_step if spec["form"] in ("step", "dc_generator", "eddy_brake") else None}
+        out = {"load_torque": TL, "t_step": t_step if spec["form"] in ("step", *SWITCHED_LOADS) else None}
         if spec["form"] == "dc_generator":
             # EMF ``emf`` at synchronous speed; the circuit resistance gives TL there (brush drop aside)
             ke = spec["emf"] / mo.w_sync
@@ -323,6 +331,10 @@ class LoadTorque(Effect):
             T_k = TL * (1.0 + q * q) / (2.0 * q)
             mech = replace(mech, brake=(T_k, w_k, spec["field_time_constant"]))
             out.update(peak_torque=T_k, critical_speed=w_k)
+        if spec["form"] == "battery_charger":
+            w_c = spec["cut_in_ratio"] * mo.w_sync
+            mech = replace(mech, cut_in_speed=w_c)
+            out.update(cut_in_speed=w_c)
         build.plant["mechanics"] = mech
         return out
 

@@ -44,7 +44,7 @@ HELDOUT = {
     "main_saturation": ("steel_gap", "langevin"),
     "iron_loss": ("steinmetz",),
     "leakage_saturation": ("closed_slot_bridge",),
-    "load_torque": ("eddy_brake",),
+    "load_torque": ("battery_charger",),
     "two_mass": ("slip_clutch",),
     "temperature_drift": ("three_body",),
     "inverter_drop": ("mosfet_capacitive",),
@@ -62,7 +62,8 @@ RETIRED = {
     "speed_sensor_gain": ("tacho_filter",),  # the catalogue's tachometer filter, tach_lag
     "two_mass": ("elastomer",),  # the catalogue's hardening coupling, tm_hardening
     "channel_delay": ("mux_skew",),  # a card's sequence in meta.yaml (channel_skew mapping), per-phase skews
-    "load_torque": ("dc_generator",),  # the catalogue's DC machine's armature lag (the speed share's state)
+    # the catalogue's DC machine's armature lag (the speed share's state); the brake's law (r_crit)
+    "load_torque": ("dc_generator", "eddy_brake"),
 }
 
 #: The motulator source (``synthetic/motulator_source.py``) injects three effects; development
@@ -76,12 +77,12 @@ MOTULATOR_DEVELOPMENT = {
 MOTULATOR_HELDOUT = {
     "main_saturation": ("steel_gap",),
     "two_mass": ("slip_clutch",),
-    "load_torque": ("eddy_brake",),
+    "load_torque": ("battery_charger",),
 }
 #: motulator's held-out forms the diagnosis has since been developed on (as :data:`RETIRED`).
 MOTULATOR_RETIRED = {
     "two_mass": ("elastomer",),  # the catalogue's hardening coupling, tm_hardening
-    "load_torque": ("dc_generator",),  # the catalogue's DC machine's armature lag
+    "load_torque": ("dc_generator", "eddy_brake"),  # the DC machine's armature lag; the brake's law
 }
 
 #: Held-out forms drawn only for some scenario kinds (all others: every scenario).

@@ -30,6 +30,14 @@ at ``t_step``, ``T = T_k (i_f/I_f)^2 2 (w/w_k)/(1 + (w/w_k)^2)``: the torque-spe
 eddy-current brake with a critical speed ``w_k`` where its torque peaks at ``T_k`` (Wouterse,
 IEE Proc. B 138(4), 1991), times the square of the excitation current, which rises with the
 field winding's time constant ``tau_f`` (``i_f/I_f = 1 - exp(-(t - t_step)/tau_f)``).
+Retired too (the diagnosis's load has the brake's law since); held out in its place,
+``battery_charger``: a permanent-magnet generator charging a battery through a diode bridge,
+connected at ``t_step``. Its EMF ``k_e w`` drives a current only above the battery's voltage
+plus the diodes' drop, ``U_c = k_e w_c``; then ``i = (k_e |w| - U_c)/R`` through the
+circuit's resistance, so ``T = T_L (|w| - w_c)/(w_ref - w_c)`` above the cut-in speed ``w_c``
+and 0 below it (the generator's inductance neglected: its time constant is short beside a
+start's; e.g. a small wind turbine's charging curve, Manwell, McGowan, Rogers, Wind Energy
+Explained, 2009, ch. 5).
 
 Two-mass coupling torque ``T_sh = k dz(twist) + c (w_m - w_l)`` with ``dz`` a dead zone of
 half-width ``backlash`` (rad; 0 = linear spring); no damping torque in the free play.
@@ -54,9 +62,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-LOADS = ("none", "constant", "quadratic", "step", "dc_generator", "eddy_brake")
+LOADS = ("none", "constant", "quadratic", "step", "dc_generator", "eddy_brake", "battery_charger")
 (M_JM, M_JL, M_FV, M_FC, M_K, M_C, M_BL, M_TWO, M_LOAD, M_TL, M_WREF, M_TSTEP, M_FS, M_WS, M_KE, M_RA, M_LA, M_UB,
- M_IB, M_ZR, M_PG, M_TS, M_BK, M_BW, M_BF) = range(25)
+ M_IB, M_ZR, M_PG, M_TS, M_BK, M_BW, M_BF, M_WC) = range(26)
 N_MECH = 5  # states: w_m, w_l, twist, theta, i_a
 
 
@@ -82,6 +90,8 @@ class Mechanics:
     slip_torque : torque ``T_lim`` at which a slip hub in series with the spring slips, N m (0: none).
     brake : eddy-current brake ``(T_k N m, w_k rad/s, tau_f s)``: peak torque, critical speed,
         field time constant (load ``eddy_brake``).
+    cut_in_speed : speed ``w_c`` below which a battery charger's diodes block, mechanical rad/s
+        (load ``battery_charger``; ``load_torque`` is then its torque at ``w_ref``).
     """
 
     J_load: float = 0.0
@@ -99,6 +109,7 @@ class Mechanics:
     twist_ref: float = 0.0
     slip_torque: float = 0.0
     brake: tuple = (0.0, 1.0, 1.0)
+    cut_in_speed: float = 0.0
 
     def __post_init__(self):
         if self.load not in LOADS:
@@ -117,7 +128,7 @@ class Mechanics:
         return math.sqrt(self.stiffness * (1 / J_motor + 1 / self.J_load)) / (2 * math.pi)
 
     def pack(self, J: float, fv: float, fc: float) -> np.ndarray:
-        out = np.zeros(25)
+        out = np.zeros(26)
         out[M_JM], out[M_JL], out[M_FV], out[M_FC] = J, self.J_load, fv, fc
         out[M_K], out[M_C], out[M_BL], out[M_TWO] = self.stiffness, self.damping, self.backlash, float(self.two_mass)
         out[M_LOAD], out[M_TL] = LOADS.index(self.load), self.load_torque
@@ -127,6 +138,7 @@ class Mechanics:
         out[M_ZR] = self.twist_ref
         out[M_TS] = self.slip_torque
         out[M_BK:M_BF + 1] = self.brake
+        out[M_WC] = self.cut_in_speed
         return out
 
     def armature_time_constant(self) -> float:
@@ -215,6 +227,10 @@ def _loads(t, w, mech):
         field = 1.0 - math.exp(-(t - mech[M_TSTEP]) / mech[M_BF])
         q = w / mech[M_BW]
         return 0.0, mech[M_BK] * field * field * 2.0 * q / (1.0 + q * q)
+    if code == 6 and t >= mech[M_TSTEP]:  # battery charger: no current below the cut-in speed, then linear
+        over = abs(w) - mech[M_WC]
+        if over > 0.0:
+            return 0.0, math.copysign(mech[M_TL] * over / (mech[M_WREF] - mech[M_WC]), w)
     return 0.0, 0.0
 
 

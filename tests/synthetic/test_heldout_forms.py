@@ -41,6 +41,7 @@ MID = {
     "dc_generator": {"size": 0.55, "step_fraction": 0.5, "armature_time_constant": 6e-3, "emf": 175.0,
                      "brush_drop": 1.5},
     "eddy_brake": {"size": 0.55, "step_fraction": 0.5, "critical_speed_ratio": 0.5, "field_time_constant": 0.05},
+    "battery_charger": {"size": 0.55, "step_fraction": 0.0, "cut_in_ratio": 0.55},
     "elastomer": {"size": 77.0, "inertia_ratio": 1.0, "damping_ratio": 0.06, "hardening": 2.25},
     "slip_clutch": {"size": 77.0, "inertia_ratio": 1.0, "damping_ratio": 0.06, "slip_share": 1.0},
     "three_body": {"size": 15.0, "rotor_factor": 1.5, "time_constant": 2100.0, "core_time_constant": 4.0,
@@ -103,7 +104,7 @@ def test_every_effect_has_a_heldout_form_and_development_is_what_the_diagnosis_s
     assert DEVELOPMENT == seen and set(HELDOUT) == set(EFFECTS) == set(seen)
     # held out until developed on
     assert RETIRED == {"speed_sensor_gain": ("tacho_filter",), "two_mass": ("elastomer",),
-                       "channel_delay": ("mux_skew",), "load_torque": ("dc_generator",)}
+                       "channel_delay": ("mux_skew",), "load_torque": ("dc_generator", "eddy_brake")}
     for name, forms in RETIRED.items():
         assert not set(forms) & set(HELDOUT[name]) and not set(forms) & set(seen[name]), name
     for name, forms in HELDOUT.items():
@@ -303,6 +304,29 @@ def test_eddy_brake_torque_follows_its_law_and_its_excitation():
     law = T_k * field**2 * 2 * (w[on] / w_k) / (1 + (w[on] / w_k) ** 2)
     assert np.max(np.abs(tq[on] - law)) < 0.01 * np.max(law)
     assert ds.stop["speed"][-1] < 0.5 * base().stop["speed"][-1]
+
+
+def test_battery_charger_brakes_only_above_its_cut_in_speed_and_linearly_there():
+    """Connected from the start: no torque below the cut-in speed ``w_c`` (the diodes block),
+    above it a torque linear in the excess speed reaching the drawn size at synchronous speed;
+    in the free stop it brakes until the speed falls to ``w_c``, then the stop is the bare machine's."""
+    ds = held("battery_charger")
+    eff = ds.truth["effects"][0]
+    mid = MID["battery_charger"]
+    w_c = eff["cut_in_speed"]
+    assert w_c == pytest.approx(mid["cut_in_ratio"] * MO.w_sync) and eff["t_step"] == 0.0
+    w, tq = ds.startup["speed"], ds.startup["torque"]
+    below, above = np.abs(w) < w_c, np.abs(w) > w_c
+    assert below.sum() > 50 and above.sum() > 50  # the start runs through the cut-in speed
+    assert np.all(tq[below] == 0.0)
+    law = mid["size"] * MO.rated_torque * (np.abs(w[above]) - w_c) / (MO.w_sync - w_c)
+    assert np.max(np.abs(tq[above] - law)) < 0.01 * mid["size"] * MO.rated_torque
+    stop = ds.stop["speed"]
+    assert stop[0] > w_c and stop[-1] < stop[0]
+    k = int(np.argmax(stop < w_c))  # where the charger lets go
+    assert 0 < k < len(stop) - 10
+    fast, slow = (stop[0] - stop[k]) / k, (stop[k] - stop[-1]) / (len(stop) - 1 - k)
+    assert fast > 3 * slow  # braked hard above the cut-in speed, coasting on friction below it
 
 
 def test_steinmetz_iron_loss_separates_into_hysteresis_and_eddy_currents():

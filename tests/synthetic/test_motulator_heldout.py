@@ -1,8 +1,8 @@
 """Held-out forms of the motulator source: the split, the draws, the curves and the records.
 
 motulator injects three effects; their held-out forms (gap plus M800-50A magnetising curve,
-slip clutch, eddy-current brake; the retired elastomer coupling and DC generator load are drawn by
-name only) are built
+slip clutch, battery charger; the retired elastomer coupling, DC generator and eddy-current brake
+loads are drawn by name only) are built
 on motulator's own classes (``synthetic/motulator_effects.py``). Records: a 2-pole 1 kW motor,
 0.08 s at 5 kHz, noise-free.
 """
@@ -20,8 +20,7 @@ SMALL = {"name": "small_2pole", "pole_pairs": 1, "voltage": 230.0, "frequency": 
          "rated_power": 1000.0}
 HELD = {"main_saturation": {"form": "steel_gap", "size": 0.3, "iron_ratio": 250.0},
         "two_mass": {"form": "slip_clutch", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1, "slip_share": 0.8},
-        "load_torque": {"form": "eddy_brake", "size": 0.5, "time": 0.04, "critical_speed_ratio": 0.5,
-                        "field_time_constant": 0.01}}
+        "load_torque": {"form": "battery_charger", "size": 0.5, "time": 0.0, "cut_in_ratio": 0.2}}
 
 
 def _csv(path):
@@ -70,10 +69,12 @@ def records(tmp_path_factory):
                                           "hardening": 2.5}},
                "spring": {"two_mass": {"size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1}},
                "dc_generator": {"load_torque": {"form": "dc_generator", "size": 0.5, "time": 0.04,
-                                                "armature_time_constant": 0.01}}}
+                                                "armature_time_constant": 0.01}},
+               "eddy_brake": {"load_torque": {"form": "eddy_brake", "size": 0.5, "time": 0.04,
+                                              "critical_speed_ratio": 0.5, "field_time_constant": 0.01}}}
     for name, effects in {"none": None, **{k: {k: v} for k, v in HELD.items()}, **retired}.items():
         folder = tmp_path_factory.mktemp(name)
-        stop = name in ("none", "load_torque", "dc_generator")
+        stop = name in ("none", "load_torque", "dc_generator", "eddy_brake")
         truth = make_motulator_dataset(SMALL, "dol", effects, None, 0, folder, duration=0.08, sample_rate=5000,
                                        stop=stop, stop_max_duration=0.3)
         out[name] = (_csv(folder / "startup.csv"), _csv(folder / "stop.csv") if stop else None, truth)
@@ -91,8 +92,27 @@ def test_each_heldout_form_changes_motulators_record(records):
         assert di > 0.05 or dw > 0.5, (name, di, dw)  # > 5 x the blind draws' smallest noise
 
 
-def test_eddy_brake_is_silent_until_excited_and_then_brakes_by_its_law(records):
+def test_battery_charger_brakes_above_its_cut_in_speed_only(records):
+    """Connected from the start: the speed follows the bare machine's until it passes the cut-in
+    speed (a fifth of synchronous: the short record reaches 0.4 of it), then falls behind; in the
+    stop it brakes towards that speed."""
     (base, base_stop, _), (rec, stop, truth) = records["none"], records["load_torque"]
+    c = truth["effects"][0]["form"]["charger"]
+    w_sync = 2 * np.pi * 50
+    assert c["w_c"] == pytest.approx(0.2 * w_sync) and c["T_L"] == pytest.approx(0.5 * 1000.0 / (0.97 * w_sync))
+    below = np.abs(base["speed"]) < 0.95 * c["w_c"]
+    below[np.argmax(~below):] = False  # up to the first pass of the cut-in speed
+    assert below.sum() > 10
+    np.testing.assert_allclose(rec["speed"][below], base["speed"][below], rtol=0, atol=1e-3)
+    assert rec["speed"][-1] < base["speed"][-1] - 1.0
+    k = min(len(stop["speed"]), len(base_stop["speed"])) - 1
+    assert stop["speed"][k] < base_stop["speed"][k] - 20.0  # it brakes in the free stop
+    assert stop["speed"][k] > c["w_c"]  # ... but never below its cut-in speed (0.46 s time constant)
+
+
+def test_retired_eddy_brake_is_silent_until_excited_and_then_brakes_by_its_law(records):
+    """The retired eddy-current brake, drawn by name."""
+    (base, base_stop, _), (rec, stop, truth) = records["none"], records["eddy_brake"]
     b = truth["effects"][0]["form"]["brake"]
     before = rec["t"] < b["time"]
     np.testing.assert_allclose(rec["speed"][before], base["speed"][before], rtol=0, atol=1e-3)
