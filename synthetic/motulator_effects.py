@@ -178,23 +178,35 @@ def generator(torque: float, w_sync: float, emf: float, time_constant: float, br
             "time": time}
 
 
-def eddy_brake_class(base):
-    """motulator's mechanics class ``base`` with an eddy-current brake on the load side."""
+def shaft_load_class(base, torque):
+    """motulator's mechanics class ``base`` with a passive load on the load side whose torque
+    ``torque(load, t, w)`` (N m, at time ``t`` s and load-side speed ``w`` rad/s) comes from
+    the load's parameters ``load`` (the ``shaft_load`` argument)."""
 
-    class BrakeLoaded(base):
-        def __init__(self, *args, brake: dict, **kw):
+    class ShaftLoaded(base):
+        def __init__(self, *args, shaft_load: dict, **kw):
             super().__init__(*args, **kw)
-            self.brake = brake
+            self.shaft_load = shaft_load
 
         def set_outputs(self, t):
             super().set_outputs(t)
-            b = self.brake
             w = np.real(self.out.w_L if hasattr(self.out, "w_L") else self.out.w_M)
-            field = 1.0 - np.exp(-(t - b["time"]) / b["tau_f"]) if t >= b["time"] else 0.0
-            q = w / b["w_k"]
-            self.out.tau_L_tot = self.out.tau_L_tot + b["T_k"] * field * field * 2 * q / (1 + q * q)
+            self.out.tau_L_tot = self.out.tau_L_tot + torque(self.shaft_load, t, w)
 
-    return BrakeLoaded
+    return ShaftLoaded
+
+
+def brake_torque(b: dict, t: float, w: float) -> float:
+    """The eddy-current brake :func:`brake` ``b``'s torque (N m) at ``t`` (s) and speed ``w`` (rad/s)."""
+    field = 1.0 - np.exp(-(t - b["time"]) / b["tau_f"]) if t >= b["time"] else 0.0
+    q = w / b["w_k"]
+    return b["T_k"] * field * field * 2 * q / (1 + q * q)
+
+
+def charger_torque(c: dict, t: float, w: float) -> float:
+    """The battery charger :func:`charger` ``c``'s torque (N m) at ``t`` (s) and speed ``w`` (rad/s)."""
+    over = max(abs(w) - c["w_c"], 0.0) if t >= c["time"] else 0.0
+    return np.sign(w) * c["T_L"] * over / (c["w_sync"] - c["w_c"])
 
 
 def brake(torque: float, w_sync: float, critical_speed_ratio: float, field_time_constant: float,
@@ -205,24 +217,6 @@ def brake(torque: float, w_sync: float, critical_speed_ratio: float, field_time_
     w_k = critical_speed_ratio * w_sync
     q = w_sync / w_k
     return {"T_k": torque * (1 + q * q) / (2 * q), "w_k": w_k, "tau_f": field_time_constant, "time": time}
-
-
-def charger_class(base):
-    """motulator's mechanics class ``base`` with a battery charger on the load side."""
-
-    class ChargerLoaded(base):
-        def __init__(self, *args, charger: dict, **kw):
-            super().__init__(*args, **kw)
-            self.charger = charger
-
-        def set_outputs(self, t):
-            super().set_outputs(t)
-            c = self.charger
-            w = np.real(self.out.w_L if hasattr(self.out, "w_L") else self.out.w_M)
-            over = max(abs(w) - c["w_c"], 0.0) if t >= c["time"] else 0.0
-            self.out.tau_L_tot = self.out.tau_L_tot + np.sign(w) * c["T_L"] * over / (c["w_sync"] - c["w_c"])
-
-    return ChargerLoaded
 
 
 def charger(torque: float, w_sync: float, cut_in_ratio: float, time: float) -> dict:
@@ -342,15 +336,13 @@ def mechanics(mt: dict, m: dict, eff: dict, exc: dict, stop_at: float | None = N
         return fv + (fc + fc_load) / np.maximum(a, eps) + k_quad * a
 
     tm = eff.get("two_mass")
-    extra = ({"generator": gen} if gen is not None else {"brake": brk} if brk is not None
-             else {"charger": chg} if chg is not None else {})
+    shaft = (brk, brake_torque) if brk is not None else (chg, charger_torque) if chg is not None else None
+    extra = {"generator": gen} if gen is not None else {"shaft_load": shaft[0]} if shaft is not None else {}
 
     def loaded(cls):
         if gen is not None:
             return generator_class(cls)
-        if brk is not None:
-            return eddy_brake_class(cls)
-        return charger_class(cls) if chg is not None else cls
+        return shaft_load_class(cls, shaft[1]) if shaft is not None else cls
 
     if tm is None:
         return loaded(mt["model"].StiffMechanicalSystem)(J=par["J"], B_L=B_L, tau_L=tau_L, **extra)

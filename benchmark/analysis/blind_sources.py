@@ -188,7 +188,7 @@ def motulator_options(rng: np.random.Generator, name: str, forms: str, duration:
     """The options of effect ``name`` of a motulator draw, its form from the form set ``forms``
     (:func:`synthetic.independent.forms.motulator_forms_of`; a single development form takes
     no draw, so that ``development`` draws are the ones made before the split)."""
-    from synthetic.independent.forms import motulator_forms_of
+    from synthetic.independent.forms import SWITCHED_LOADS, motulator_forms_of
 
     pool = motulator_forms_of(name, forms)
     form = pool[0] if len(pool) == 1 else str(rng.choice(pool))
@@ -208,7 +208,7 @@ def motulator_options(rng: np.random.Generator, name: str, forms: str, duration:
     opts = {"form": form, "size": float(rng.uniform(0.2, 0.6))}
     if form == "step":
         opts["time"] = float(rng.uniform(0.3, 0.6) * duration)
-    if form in ("dc_generator", "eddy_brake", "battery_charger"):  # on at the start or later, with equal odds
+    if form in SWITCHED_LOADS:  # switched on at the start or later, with equal odds
         opts["time"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.3, 0.6) * duration)
     if form == "dc_generator":
         opts.update(armature_time_constant=float(np.exp(rng.uniform(np.log(2e-3), np.log(2e-2)))),

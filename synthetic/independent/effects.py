@@ -62,6 +62,7 @@ import numpy as np
 
 from synthetic.independent.curves import M400_50A, LeakageCurve, MagnetisingCurve
 from synthetic.independent.effect_base import Build, Effect, log_uniform
+from synthetic.independent.forms import SWITCHED_LOADS
 from synthetic.independent.inverter import Inverter
 from synthetic.independent.plant import IronLoss
 from synthetic.independent.rotor import RotorCage, design
@@ -286,10 +287,6 @@ class InverterDrop(Effect):
         i_c = float(spec.get("transition_fraction", 0.0)) * In
         build.plant["inverter"] = Inverter(V_T=spec["V_T"], V_D=spec["V_D"], r=spec["r"], dead_time=spec["dead_time"],
                                            i_knee=0.01 * In, i_transition=i_c)
-
-
-#: Load forms switched on at the start or at 30-70 % of the record, with equal odds.
-SWITCHED_LOADS = ("dc_generator", "eddy_brake", "battery_charger")
 
 
 class LoadTorque(Effect):

@@ -85,6 +85,9 @@ MOTULATOR_RETIRED = {
     "load_torque": ("dc_generator", "eddy_brake"),  # the DC machine's armature lag; the brake's law
 }
 
+#: ``load_torque`` forms switched on at the start or later in the record, with equal odds (both sources).
+SWITCHED_LOADS = ("dc_generator", "eddy_brake", "battery_charger")
+
 #: Held-out forms drawn only for some scenario kinds (all others: every scenario).
 SCENARIOS = {"current_transformer": ("dol", "six_step")}
 
