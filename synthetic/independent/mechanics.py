@@ -116,6 +116,9 @@ class Mechanics:
             raise ValueError(f"load must be one of {LOADS}, got {self.load!r}")
         if self.stiffness > 0 and not self.J_load > 0:
             raise ValueError("a two-mass shaft needs J_load > 0")
+        if self.load == "battery_charger" and not 0.0 <= self.cut_in_speed < self.w_ref:
+            raise ValueError(f"battery_charger: cut_in_speed must be in [0, w_ref = {self.w_ref:.4g} rad/s), "
+                             f"got {self.cut_in_speed:.4g} (its torque is linear from the cut-in to w_ref)")
 
     @property
     def two_mass(self) -> bool:

@@ -483,3 +483,14 @@ def test_heldout_records_are_reproducible_per_seed(tmp_path):
         np.testing.assert_array_equal(a.startup[ch], b.startup[ch])
     assert not np.array_equal(a.startup["i_r"], c.startup["i_r"])
     assert a.truth["effects"] == b.truth["effects"]
+
+
+@pytest.mark.parametrize("ratio", [-0.1, 1.0, 1.5])
+def test_a_battery_charger_whose_cut_in_is_not_below_synchronous_speed_is_refused(ratio):
+    """The charger's torque is linear from its cut-in speed to synchronous speed: a cut-in at or
+    above it (or below rest) has no such law, and the plant says so instead of dividing by zero."""
+    from synthetic.independent.mechanics import Mechanics
+
+    with pytest.raises(ValueError, match="cut_in_speed must be in"):
+        Mechanics(load="battery_charger", load_torque=5.0, w_ref=157.0, cut_in_speed=ratio * 157.0)
+    Mechanics(load="battery_charger", load_torque=5.0, w_ref=157.0, cut_in_speed=0.5 * 157.0)  # a real one is kept
