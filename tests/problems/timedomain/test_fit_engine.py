@@ -97,6 +97,56 @@ def test_kernel_cache_gives_the_kernels_outputs_and_simulates_each_row_once(offs
     np.testing.assert_array_equal(one, direct)
 
 
+def _stop_afresh(model, X):
+    """The recorded stop of each row of ``X`` computed alone, as :meth:`JointModel.recorded_stop`
+    did before it kept coasts: the sensors undone, the start profiled, the coast afresh."""
+    d, out = model.data, []
+    for x in X:
+        x = x[None, :]
+        rows = model.rows(x)
+        y, w0 = d.stop_speed[None, :], np.full((1, 1), float(d.stop_w0))
+        for eff, s in reversed(model._measure_order):
+            y, w0 = eff.stop_true_speed(y, x[:, s], model.ctx), eff.stop_true_speed(w0, x[:, s], model.ctx)
+        coast, h = model.coast(x, rows), 1e-3 * max(abs(float(d.stop_w0)), 1.0)
+        with np.errstate(all="ignore"):
+            base = coast.speed(w0)
+            D = (coast.speed(w0 + h) - base) / h
+            step = np.nansum((y - base) * D, axis=1, keepdims=True) / np.maximum(np.nansum(D * D, axis=1,
+                                                                                     keepdims=True), 1e-300)
+        limit = 0.05 * abs(float(d.stop_w0))
+        stop = coast.speed(w0 + np.clip(np.nan_to_num(step), -limit, limit))
+        for eff, s in model._measure_order:
+            stop = eff.measure_stop(stop, x[:, s], model.ctx, d.stop_t, d.stop_speed)
+        out.append(stop[0])
+    return np.array(out)
+
+
+def test_the_kept_coasts_are_the_stop_computed_afresh_bit_for_bit(offset_record):
+    """Rows of every coast (friction alone, a fan load, a DC generator's lag, an eddy-current
+    brake's integrated law) beside a tachometer, in one batch with repeats and columns that do
+    not move the stop (a Jacobian's): each row's recorded stop equals the one computed alone,
+    and a coast already computed is not computed again."""
+    data, ctx, fcs = offset_record
+    data.coasts = type(data.coasts)()  # a fresh store: the module's other tests share the record
+    model = JointModel(data, 2, [EFFECTS["load_torque"], EFFECTS["speed_sensor_gain"]], ctx, TRUE, fcs)
+    base = [TRUE[n] for n in model.base_names]
+    load = {"fan": [0.0, 0.3, 0.0, 0.5, 0.0, 1e-4, 1.0, 0.0], "generator": [0.0, 0.0, 0.4, 0.1, 1.0, 0.02, 1.0, 0.0],
+            "brake": [0.0, 0.0, 0.4, 0.1, 1.0, 0.05, 1.0, 1.5], "constant": [0.2, 0.0, 0.0, 0.5, 0.0, 1e-4, 1.0, 0.0]}
+    tach = [0.01, 0.002, 0.003, -0.001, 0.0]
+    X = np.array([base + load[k] + tach for k in ("fan", "generator", "brake", "constant")])
+    rs, gain = model.names.index("Rs"), model.names.index("speed_sensor_gain.tach_gain_error")
+    moved = X[[0, 0, 1, 2, 3, 2]].copy()
+    moved[1, rs] *= 1.01  # the electrical part: the same coast
+    moved[5, gain] += 1e-4  # the tachometer: the record undone differently
+    before = data.coasts.computed
+    got = model.recorded_stop(moved, model.rows(moved))
+    np.testing.assert_array_equal(got, _stop_afresh(model, moved))
+    assert data.coasts.computed - before == 5  # the Rs column's coast was the first row's
+    again = model.recorded_stop(moved[[4, 1]], model.rows(moved[[4, 1]]))
+    np.testing.assert_array_equal(again, got[[4, 1]])
+    assert data.coasts.computed - before == 5  # kept
+
+
 def _at_rest_from_first_stop(w):
     down = ~(w > 0)
     if down.any():

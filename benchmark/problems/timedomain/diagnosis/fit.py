@@ -15,7 +15,7 @@ batched through the kernel), in coordinates normalised to their bounds.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from scipy import optimize
@@ -27,7 +27,7 @@ from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.engine import quiet
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
-from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache
+from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache, RowCache
 from benchmark.problems.timedomain.extended import IDX, base_rows, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
@@ -76,10 +76,12 @@ class DiagnosisData:
     supply_frequency: float
     current_used: np.ndarray | None = None  # (N,) False where the conditioning masked a current sample
     kernel: KernelCache = field(init=False, repr=False, compare=False)  # the model's outputs of this input
+    coasts: RowCache = field(init=False, repr=False, compare=False)  # the stop's coasts (JointModel.recorded_stop)
     fits: FitTally = field(init=False, repr=False, compare=False)  # how the fits on this record ended
 
     def __post_init__(self):
         self.kernel = KernelCache(self.v_alpha, self.v_beta, self.linear, self.sample_time)
+        self.coasts = RowCache()
         self.fits = FitTally()
 
     @classmethod
@@ -276,23 +278,43 @@ class JointModel:
         sensors' deterministic part undone (:meth:`Effect.stop_true_speed`) in one Gauss-Newton
         step (the coast is nearly linear in it), limited to 5 % of the measured start."""
         d = self.data
+        inputs = self.coast_inputs(X, rows)
+        undo = [(eff, s) for eff, s in reversed(self._measure_order)
+                if type(eff).stop_true_speed is not Effect.stop_true_speed]
+        # what a row's coast is computed from: its mechanics, and the sensors undone on the record
+        head = (tuple(eff.name for eff, _ in undo), self._context_key()) if undo else ()
+        cols = np.ascontiguousarray(np.hstack([*inputs, *(X[:, s] for _, s in undo)]), dtype=float)
+        stop = d.coasts.get([(head, r.tobytes()) for r in cols],
+                            lambda first: self._profiled_coast(X[first], [a[first] for a in inputs], undo),
+                            (len(d.stop_t),))
+        for eff, s in self._measure_order:  # the same speed sensor records the stop
+            stop = eff.measure_stop(stop, X[:, s], self.ctx, d.stop_t, d.stop_speed)
+        return stop
+
+    def _context_key(self) -> tuple:
+        """The context's fields as a key (a sensor's :meth:`Effect.stop_true_speed` reads them)."""
+        ctx = self.ctx
+        return tuple(getattr(ctx, f.name) for f in fields(ctx) if f.name != "facts") + (repr(ctx.facts),)
+
+    def _profiled_coast(self, X: np.ndarray, inputs: list[np.ndarray], undo: list) -> np.ndarray:
+        """The true speed of the stop (n, N_stop) of rows whose coast is computed from ``inputs``
+        (:meth:`coast_inputs`), the speed at its start profiled (:meth:`recorded_stop`) on the
+        record with the sensors ``undo`` undone; each row's speed depends on its own inputs only."""
+        d = self.data
         y = np.broadcast_to(d.stop_speed[None, :], (len(X), len(d.stop_t)))
         w0 = np.full((len(X), 1), float(d.stop_w0))
-        for eff, s in reversed(self._measure_order):  # the recorded stop, sensors undone
+        for eff, s in undo:  # the recorded stop, sensors undone
             y = eff.stop_true_speed(y, X[:, s], self.ctx)
             w0 = eff.stop_true_speed(w0, X[:, s], self.ctx)
         h = 1e-3 * max(abs(float(d.stop_w0)), 1.0)
-        coast = self.coast(X, rows)
+        coast = FreeCoast(d.stop_t, *inputs)
         with np.errstate(all="ignore"):
             base = coast.speed(w0)
             D = (coast.speed(w0 + h) - base) / h
             step = (np.nansum((y - base) * D, axis=1, keepdims=True)
                     / np.maximum(np.nansum(D * D, axis=1, keepdims=True), 1e-300))
         limit = 0.05 * abs(float(d.stop_w0))
-        stop = coast.speed(w0 + np.clip(np.nan_to_num(step), -limit, limit))
-        for eff, s in self._measure_order:  # the same speed sensor records the stop
-            stop = eff.measure_stop(stop, X[:, s], self.ctx, d.stop_t, d.stop_speed)
-        return stop
+        return coast.speed(w0 + np.clip(np.nan_to_num(step), -limit, limit))
 
     def free_stop(self, X: np.ndarray, rows: np.ndarray, w0: np.ndarray | None = None) -> np.ndarray:
         """Speed of the free stop from the speed at its start (``w0`` (n, 1), rad/s; the measured
@@ -303,12 +325,17 @@ class JointModel:
         return self.coast(X, rows).speed(np.broadcast_to(np.asarray(w0, float), (len(X), 1)))
 
     def coast(self, X: np.ndarray, rows: np.ndarray) -> FreeCoast:
-        """The free coast of the rows, ``J dw/dt = -(A + B w + C w^2)`` with ``A`` Coulomb friction
-        plus the passive load torques (constant, and the switched load's constant part as it
-        stands at the start-up's end, :func:`switched_at_end`), ``B = fv`` plus the switched
-        load's part that follows speed (a DC generator still on its resistor, through its armature's
-        lag ``tau_s``; an eddy-current brake's law when ``r_crit`` > 0, integrated), ``C`` a fan
-        load over ``w_ref^2``."""
+        """The free coast of the rows (:meth:`coast_inputs`)."""
+        return FreeCoast(self.data.stop_t, *self.coast_inputs(X, rows))
+
+    def coast_inputs(self, X: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
+        """What the free coast of the rows is computed from, :class:`.free_coast.FreeCoast`'s
+        arguments after the times, each an (n, 1) column: ``J dw/dt = -(A + B w + C w^2)`` with
+        ``A`` Coulomb friction plus the passive load torques (constant, and the switched load's
+        constant part as it stands at the start-up's end, :func:`switched_at_end`), ``B = fv``
+        plus the switched load's part that follows speed (``B_a``: a DC generator still on its
+        resistor, through its armature's lag ``tau_s``; an eddy-current brake's law when
+        ``r_crit`` > 0, integrated), ``C`` a fan load over ``w_ref^2``."""
         d = self.data
         theta = self.full_parameters(X)
         J, fv = theta[:, 4:5], theta[:, 5:6]
@@ -321,8 +348,8 @@ class JointModel:
         fv = fv + B_a
         with np.errstate(all="ignore"):
             C = np.where(col["w_ref"] > 0, col["T_q"] / np.maximum(col["w_ref"], 1e-12) ** 2, 0.0)
-        return FreeCoast(d.stop_t, J, fv, A, C, B_a, col["tau_s"],  # its armature's lag (tau_s > 0)
-                         col["r_crit"], col["w_ref"])  # an eddy-current brake's law (r_crit > 0)
+        return [J, fv, A, C, B_a, col["tau_s"],  # its armature's lag (tau_s > 0)
+                col["r_crit"], col["w_ref"]]  # an eddy-current brake's law (r_crit > 0)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
         return self.residuals_of(self.simulate(X), overwrite=True)
