@@ -43,7 +43,12 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import condition_record, estimate_offsets, pretrigger_segment
+from benchmark.problems.timedomain.record_conditioning import (
+    condition_record,
+    estimate_offsets,
+    has_pretrigger,
+    pretrigger_segment,
+)
 from benchmark.problems.timedomain.switch_on import SwitchingSteps, sampled_volt_seconds, switching_steps
 
 #: Key of ``StartupRecord.removed`` holding the pre-trigger samples the offsets were measured on.
@@ -157,7 +162,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     said.extend(report.notes)
     removed, kept = [], []
     offsets = {name: (value, unit, how, se) for name, value, unit, how, se in report.offsets}
-    from_tail = report.switch_on is None or report.switch_on < 50
+    from_tail = not has_pretrigger(report.switch_on)  # the offsets came from the steady tail
     steady = steady_tail(i, ts, report.f0)
     if from_tail and not steady:
         said.append("sensor offsets not estimated: no pre-trigger and the record does not reach a steady state "

@@ -103,10 +103,16 @@ def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
     return float(max(math.sqrt(L * np.var(means, ddof=1)), np.std(e)))
 
 
+def has_pretrigger(pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> bool:
+    """Whether a switch-on at sample ``pretrigger_end`` leaves at least :data:`MIN_PRETRIGGER`
+    samples before it less ``guard``: a pre-trigger whose mean is the offset."""
+    return pretrigger_end is not None and pretrigger_end - guard >= MIN_PRETRIGGER
+
+
 def pretrigger_segment(x, pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> np.ndarray | None:
     """The samples of ``x`` before a switch-on at ``pretrigger_end`` less ``guard``, when there
     are at least :data:`MIN_PRETRIGGER` of them (the segment whose mean is the offset), else None."""
-    if pretrigger_end is None or pretrigger_end - guard < MIN_PRETRIGGER:
+    if not has_pretrigger(pretrigger_end, guard):
         return None
     return np.asarray(x)[..., :pretrigger_end - guard]
 

@@ -338,3 +338,22 @@ def test_offset_standard_error_holds_for_a_slowly_drifting_probe_zero():
     drift = lfilter([np.sqrt(1 - pole**2)], [1, -pole], 0.05 * rng.standard_normal(n + 2000))[2000:]
     e, _, s = estimate_offsets(signal + 0.2 + drift + 0.01 * rng.standard_normal(n), TS, n_pre, F0)
     assert abs(e - 0.2) < 4 * s and abs(e) > 3 * s
+
+
+def test_one_rule_says_whether_a_record_has_a_pre_trigger():
+    """The offsets' estimate and the conditioning's choice of the steady tail read one test: a
+    switch-on 50 to 52 samples in had its offsets estimated from the tail but taken for a
+    pre-trigger's when the conditioning asked whether the tail was steady."""
+    from benchmark.problems.timedomain.record_conditioning import (
+        MIN_PRETRIGGER,
+        PRETRIGGER_GUARD,
+        has_pretrigger,
+        pretrigger_segment,
+    )
+
+    x = np.arange(200.0)
+    first = MIN_PRETRIGGER + PRETRIGGER_GUARD  # the first switch-on with a pre-trigger
+    for k in (None, 0, MIN_PRETRIGGER, first - 1, first, first + 10):
+        assert has_pretrigger(k) == (pretrigger_segment(x, k) is not None)
+    assert not has_pretrigger(first - 1) and has_pretrigger(first)
+    assert len(pretrigger_segment(x, first)) == MIN_PRETRIGGER
