@@ -27,7 +27,7 @@ from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.engine import quiet
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
-from benchmark.problems.timedomain.diagnosis.kernel_cache import KernelCache, RowCache
+from benchmark.problems.timedomain.diagnosis.kernel_cache import CACHE_ROWS, KernelCache, RowCache
 from benchmark.problems.timedomain.extended import IDX, base_rows, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
@@ -53,6 +53,11 @@ class FitTally:
             row = self.by_cap.setdefault(int(cap), [0, 0])
             row[0] += 1
             row[1] += bool(at_cap)
+
+
+#: Bytes the stop's kept coasts may take (``DiagnosisData.coasts``): :data:`CACHE_ROWS` coasts of a
+#: stop up to 130000 samples (a 26 s stop at 5 kHz), fewer (at least 8) of a longer one.
+COAST_STORE_BYTES = 50_000_000
 
 
 @dataclass
@@ -81,7 +86,8 @@ class DiagnosisData:
 
     def __post_init__(self):
         self.kernel = KernelCache(self.v_alpha, self.v_beta, self.linear, self.sample_time)
-        self.coasts = RowCache()
+        n_stop = 0 if self.stop_t is None else len(self.stop_t)
+        self.coasts = RowCache(int(np.clip(COAST_STORE_BYTES // max(8 * n_stop, 1), 8, CACHE_ROWS)))
         self.fits = FitTally()
 
     @classmethod
