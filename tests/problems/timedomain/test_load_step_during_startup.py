@@ -9,6 +9,8 @@ beside the grid's: ``load_torque``, explained (6.34 -> 0.98 on the blind set).""
 
 from __future__ import annotations
 
+import pytest
+
 from tests.conftest import diagnose_with, stored_set
 
 # motulator blind seed 45, set 32: the 2.2 kW example machine spread by the draw, a six-step start.
@@ -24,6 +26,7 @@ NOISE = {"current_std": 0.09113198587807662, "current_colored_std": 0.0453818467
          "speed_std": 0.1608633111790397}
 
 
+@pytest.mark.slow  # a full diagnosis of a remade record (README: the reproductions)
 def test_a_load_step_during_a_motulator_start_up_is_named(tmp_path):
     folder = stored_set("motulator_blind45_set32", tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque"])

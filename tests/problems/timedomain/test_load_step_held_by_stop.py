@@ -11,6 +11,8 @@ starts with the base's friction above a motor's own moved into the step
 
 from __future__ import annotations
 
+import pytest
+
 from tests.conftest import diagnose_with, stored_set
 
 # motulator blind seed 51, set 22 (the draw as rows.jsonl records it): the preset 1 kW motor
@@ -27,6 +29,7 @@ NOISE = {"current_std": 0.05701416926622967, "current_colored_std": 0.0323156466
          "speed_std": 0.16112351838501565, "speed_quantum": 0.5}
 
 
+@pytest.mark.slow  # a full diagnosis of a remade record (README: the reproductions)
 def test_a_load_step_the_stop_reads_as_friction_is_named_not_a_double_cage(tmp_path):
     folder = stored_set("motulator_blind51_set22", tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["load_torque", "double_cage", "iron_loss", "speed_sensor_gain"])

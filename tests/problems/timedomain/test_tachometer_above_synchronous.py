@@ -54,6 +54,7 @@ seed: 1679352321
 """)
 
 
+@pytest.mark.slow  # a full diagnosis of a remade record (README: the reproductions)
 def test_zero_friction_in_the_base_does_not_make_a_load_torque_rider(tmp_path):
     made, folder = remade_blind_set(BLIND_TACHOMETER, tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain", "load_torque"])
