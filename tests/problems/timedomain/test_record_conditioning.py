@@ -343,17 +343,27 @@ def test_offset_standard_error_holds_for_a_slowly_drifting_probe_zero():
 def test_one_rule_says_whether_a_record_has_a_pre_trigger():
     """The offsets' estimate and the conditioning's choice of the steady tail read one test: a
     switch-on 50 to 52 samples in had its offsets estimated from the tail but taken for a
-    pre-trigger's when the conditioning asked whether the tail was steady."""
-    from benchmark.problems.timedomain.record_conditioning import (
-        MIN_PRETRIGGER,
-        PRETRIGGER_GUARD,
-        has_pretrigger,
-        pretrigger_segment,
-    )
+    pre-trigger's when the conditioning asked whether the tail was steady. Here a start cut
+    0.25 s after its switch-on (its last periods still change): with one sample too few for a
+    pre-trigger the offsets are not estimated at all (the tail cannot give them), with one more
+    they are the pre-trigger's means and removed."""
+    from benchmark.problems.timedomain.conditioning import condition_startup
+    from benchmark.problems.timedomain.data import StartupRecord
+    from benchmark.problems.timedomain.frames import clarke
+    from benchmark.problems.timedomain.record_conditioning import MIN_PRETRIGGER, PRETRIGGER_GUARD
 
-    x = np.arange(200.0)
+    v, i, _, speed = record(seed=6)
     first = MIN_PRETRIGGER + PRETRIGGER_GUARD  # the first switch-on with a pre-trigger
-    for k in (None, 0, MIN_PRETRIGGER, first - 1, first, first + 10):
-        assert has_pretrigger(k) == (pretrigger_segment(x, k) is not None)
-    assert not has_pretrigger(first - 1) and has_pretrigger(first)
-    assert len(pretrigger_segment(x, first)) == MIN_PRETRIGGER
+    said, found = {}, {}
+    for k in (first - 1, first):
+        s = slice(K_ON - k, K_ON + 2500)
+        assert condition_record(v[:, s], i[:, s], TS, f0=F0)[1].switch_on == k  # found to the sample
+        va, vb = clarke(*v[:, s])
+        ia, ib = clarke(i[0, s], i[1, s], -i[0, s] - i[1, s])
+        rec = StartupRecord(np.arange(s.stop - s.start) * TS, va, vb, ia, ib, speed[s])
+        _, lines, found[k], _ = condition_startup(rec, TS, P, F0)
+        said[k] = "\n".join(lines)
+    assert "sensor offsets not estimated: no pre-trigger" in said[first - 1] and found[first - 1] == []
+    assert "pre-trigger mean" not in said[first - 1]
+    assert "(pre-trigger mean)" in said[first] and found[first] == ["sensor_offset"]
+    assert "not estimated" not in said[first]
