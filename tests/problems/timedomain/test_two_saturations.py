@@ -88,19 +88,19 @@ def test_a_saturating_leakage_keeps_the_inverse_gamma_node():
 def test_both_saturations_fit_together():
     """Measured: mean squares (noise units) base 8.67, leakage alone 5.95, main alone 5.91, both
     2.27 (5.91 before: the pair was the main saturation alone), the plant's floor without
-    effects ~1; each fit from its three best starts to 200 evaluations (from one start to 40,
-    a Zen 5 machine's rounding left the pair at 27.1, above the base: a fit cut short). The
-    pair removes about 60 % of the excess, not all: the plant saturates its magnetising branch
-    between the two leakages, and beside a saturating leakage the augmentation's curve sits at
-    the rotor flux node (a third of such a gap is left, see MainSaturation)."""
+    effects ~1; each fit to 200 evaluations (at 40, a Zen 5 machine's rounding left the pair at
+    27.1, above the base: a fit cut short). The pair removes about 60 % of the excess, not all:
+    the plant saturates its magnetising branch between the two leakages, and beside a saturating
+    leakage the augmentation's curve sits at the rotor flux node (a third of such a gap is left,
+    see MainSaturation)."""
     noisy, truth = _plant(False)
     clean, _ = _plant(True)
     floor = _floor("paper_1kw", "dol", 3)
     fit = _JointFit(noisy, clean, truth)
     _, base = fit.fit(None)
-    _, leak = fit.fit(EFFECTS["leakage_saturation"], n_starts=3, max_nfev=200)
-    _, main = fit.fit(EFFECTS["main_saturation"], n_starts=3, max_nfev=200)
-    _, both = fit.fit(_Both(EFFECTS["leakage_saturation"], EFFECTS["main_saturation"]), n_starts=3, max_nfev=200)
+    _, leak = fit.fit(EFFECTS["leakage_saturation"], max_nfev=200)
+    _, main = fit.fit(EFFECTS["main_saturation"], max_nfev=200)
+    _, both = fit.fit(_Both(EFFECTS["leakage_saturation"], EFFECTS["main_saturation"]), max_nfev=200)
     removed = 1.0 - _excess(both["noisy"], floor["noisy"]) / _excess(base["noisy"], floor["noisy"])
     print({k: round(v["noisy"], 3) for k, v in (("floor", floor), ("base", base), ("leak", leak), ("main", main),
                                                  ("both", both))}, "removed", round(removed, 3))
