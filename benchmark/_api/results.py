@@ -183,7 +183,8 @@ class Diagnosis(_Document):
         held-out RMS residual over the noise (1 = the noise level) of the
         base model and of the final model.
     per_effect
-        for each effect, its drop-one share and fitted parameters (value, standard error).
+        for each effect, its drop-one share, its share beside the others (and over the noise
+        band: ``firm``, see :attr:`not_firm`) and fitted parameters (value, standard error).
     base
         the base model's parameters in the final model, with standard errors (SI units).
     document
@@ -217,6 +218,12 @@ class Diagnosis(_Document):
                    gap_after=gap("gap_after"), per_effect=list(doc.get("per_effect") or []),
                    base=dict(doc.get("base") or {}), document=doc, report=report,
                    outdir=None if outdir is None else Path(outdir))
+
+    @property
+    def not_firm(self) -> list[str]:
+        """The named effects that are not firm: they would not earn their place were the noise
+        floor elsewhere in its band (a noise estimate a few per cent off); the data do not settle them."""
+        return [pe["effect"] for pe in self.per_effect if not pe.get("firm", True)]
 
     def __str__(self) -> str:
         return self.report

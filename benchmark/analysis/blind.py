@@ -321,7 +321,7 @@ def failed_row(index: int, effects: list, stage: str, error: BaseException) -> d
     return {"index": index, "truth": label, "truth_effects": list(effects), "injected": label,
             "left_out_effects": [], "predicted": "error", "status": "error",
             "verdict": f"{stage} raised {type(error).__name__}: {error}", "error_stage": stage,
-            "effects": [], "conditioned": [], "held_by_base": [], "explained_share": math.nan,
+            "effects": [], "conditioned": [], "held_by_base": [], "not_firm": [], "explained_share": math.nan,
             "gap_before": math.nan, "gap_after": math.nan, "invisible": False}
 
 
@@ -363,6 +363,7 @@ def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
             "predicted": label_of(named) if named else predicted_label(doc), "status": doc["status"],
             "verdict": doc["verdict"], "effects": named,
             "conditioned": list(doc.get("removed_by_conditioning", [])), "held_by_base": held_effects(doc),
+            "not_firm": [pe["effect"] for pe in doc.get("per_effect", []) if not pe.get("firm", True)],
             "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),

@@ -35,6 +35,10 @@ def summarise(rows: list[dict]) -> dict:
     alarms = [r for r in free if r["status"] != "no_gap" or r["predicted"] != "none"]
     both = [r for r in two if set(r["truth_effects"]) <= set(r["effects"])]
     shares = [r["explained_share"] for r in eff_correct]
+    # names the rule gave but a noise estimate within its band would not (Rule.firm), right or not
+    named = [(e, e in r["truth_effects"]) for r in scored for e in r["effects"]
+             if e not in r.get("conditioned", []) and e not in r.get("held_by_base", [])]
+    not_firm = [(e, e in r["truth_effects"]) for r in scored for e in r.get("not_firm", [])]
     labels = sorted({r["truth"] for r in rows} | {r["predicted"] for r in rows},
                     key=lambda s: (s in ("none", "unexplained"), s.count("+"), s))
     idx = {k: i for i, k in enumerate(labels)}
@@ -66,6 +70,8 @@ def summarise(rows: list[dict]) -> dict:
         "both_named_ci95": wilson(len(both), len(two)),
         "median_explained_share_correct": float(np.median(shares)) if shares else math.nan,
         "statuses": statuses, "labels": labels, "confusion": cm.tolist(),
+        "names_right": sum(ok for _, ok in named), "names_wrong": sum(not ok for _, ok in named),
+        "not_firm_right": sum(ok for _, ok in not_firm), "not_firm_wrong": sum(not ok for _, ok in not_firm),
     }
 
 
@@ -90,7 +96,10 @@ def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) ->
              f"({_pct(s['both_named_rate'])}){_ci(s['both_named_ci95'])}",
              f"- median explained share of the excess held-out misfit, correct verdicts with effects: "
              f"{_pct(s['median_explained_share_correct'])}",
-             "- statuses: " + ", ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items()))]
+             "- statuses: " + ", ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items())),
+             f"- names the rule gave that are not firm (a noise estimate within its band would not give them): "
+             f"{s['not_firm_right']} of {s['names_right']} right names, {s['not_firm_wrong']} of "
+             f"{s['names_wrong']} wrong ones"]
     for r in s.get("failed_sets", []):
         lines.append(f"- set {r['index']} ({r['truth']}): {r['message']}"
                      + (" (left out of the score)" if r["stage"] == "make" else " (a miss)"))

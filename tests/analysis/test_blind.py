@@ -187,6 +187,24 @@ def test_an_effect_of_a_pair_invisible_alone_and_not_named_is_left_out_of_that_s
     assert [(r["index"], r["effect"]) for r in s["left_out_of_pairs"]] == [(0, "iron_loss"), (2, "iron_loss")]
 
 
+def test_the_score_counts_the_names_that_are_not_firm_right_and_wrong():
+    """Each named effect's ``firm`` (Rule.firm) goes into its set's row, and the summary counts the
+    rule's names that are not firm among the right and the wrong ones (seeds 434 and 435: 0 of 25
+    right, 2 of 8 wrong, measured on their diagnosis documents)."""
+    from benchmark.analysis.blind import score_row
+
+    gap = {"heldout_rms_over_noise": 1.1}
+    doc = {"status": "explained", "verdict": "leakage_saturation+sensor_offset",
+           "effects": ["leakage_saturation", "sensor_offset"], "explained_share": 0.86,
+           "gap_before": {"heldout_rms_over_noise": 1.39}, "gap_after": gap,
+           "per_effect": [{"effect": "leakage_saturation", "firm": True}, {"effect": "sensor_offset", "firm": False}]}
+    wrong = score_row(0, ["leakage_saturation"], doc)
+    assert wrong["not_firm"] == ["sensor_offset"] and wrong["predicted"] != wrong["truth"]
+    right = score_row(1, ["leakage_saturation", "sensor_offset"], doc)
+    s = summarise([{**r, "wall_time_s": 1.0} for r in (wrong, right)])
+    assert (s["names_right"], s["names_wrong"], s["not_firm_right"], s["not_firm_wrong"]) == (3, 1, 1, 1)
+
+
 def test_a_pair_is_made_again_with_each_effect_alone_from_every_source():
     from pathlib import Path
 

@@ -113,3 +113,15 @@ def test_simulate_reproduces_a_record_from_its_parameters():
     assert float((off.speed - off.speed_measured).abs().max()) > 1.0  # rad/s: a wrong rotor shows
     with pytest.raises(ConfigError, match="missing"):
         api.simulate({"Rs": 1.0})
+
+
+def test_a_diagnosis_lists_its_names_that_are_not_firm():
+    from benchmark._api.results import Diagnosis
+
+    doc = {"status": "explained", "verdict": "leakage_saturation+sensor_offset",
+           "effects": ["leakage_saturation", "sensor_offset"], "explained_share": 0.86,
+           "gap_before": {"heldout_rms_over_noise": 1.39}, "gap_after": {"heldout_rms_over_noise": 1.07},
+           "per_effect": [{"effect": "leakage_saturation", "firm": True}, {"effect": "sensor_offset", "firm": False}]}
+    d = Diagnosis.from_document(doc, "report")
+    assert d.not_firm == ["sensor_offset"] and d.gap_after == 1.07
+    assert Diagnosis.from_document({**doc, "per_effect": [{"effect": "x"}]}, "").not_firm == []  # older documents

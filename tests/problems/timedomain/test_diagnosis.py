@@ -174,6 +174,10 @@ def test_readme_example_names_double_cage(out):
     assert doc["gap_before"]["heldout_rms_over_noise"] > 2.0
     pe = doc["per_effect"][0]
     assert pe["effect"] == "double_cage" and pe["drop_one_share"] > 0.9
+    # firm: it earns wherever the noise floor lies in its band; its share there brackets the rule's
+    low, high = pe["share_over_noise_band"]
+    assert pe["firm"] is True and 0.9 < low <= pe["share_beside_the_others"] <= high
+    assert "Not firm" not in (out / "dc" / "diagnosis.md").read_text()
     assert all(np.isfinite(v["standard_error"]) for v in pe["parameters"].values())
     assert doc["localisation"]["excess_window"] is not None
     saved = json.loads((out / "dc" / "diagnosis.json").read_text())

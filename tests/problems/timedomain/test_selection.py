@@ -8,12 +8,14 @@ share is checked by ``benchmark.studies.calibration``."""
 
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings
-from benchmark.problems.timedomain.diagnosis.rule import Rule, share_removed, status_of
+from benchmark.problems.timedomain.diagnosis.rule import Rule, share_over_noise_band, share_removed, status_of
 from benchmark.problems.timedomain.diagnosis.selection import Selector
 
 
@@ -97,6 +99,25 @@ def test_the_rule_asks_a_share_of_the_excess_left_without_the_effect_and_a_visib
     # the model without it is within the band: the effect is not needed, whatever it removes
     assert not rule.earns(1.2, 1.0, BAND) and rule.earns(1.25, 1.0, BAND)
     assert Rule(0.4).earns(3.0, 2.1, BAND)
+
+
+def test_a_name_is_firm_only_where_it_earns_wherever_the_noise_floor_lies_in_its_band():
+    """Plant held-out set 434/18 (a closed-slot bridge's leakage): a current offset entered beside
+    the leakage at 1.2136 -> 1.1354, 37 % of the excess above a floor of 1; with the floor
+    anywhere in the band 0.919-1.081 (RMS over noise) it removes 21 % to 174 %: a noise estimate
+    4 % high would not have named it. The leakage there (1.840 -> 1.135) removes 71 % at the
+    least. Motulator set 435/18 (a battery charger): an iron loss at 21.41 -> 15.21, 30.4 % at a
+    floor of 1, 29.9 % at the band's low edge 0.829: not firm at the share 0.3 either."""
+    rule = Rule(0.3)
+    low, high = share_over_noise_band(1.2136, 1.1354, 0.919, 1.081)
+    assert low == pytest.approx(0.0782 / (1.2136 - 0.919**2)) and 0.2 < low < 0.22
+    assert high == pytest.approx(0.0782 / (1.2136 - 1.081**2)) and 1.7 < high < 1.8
+    assert low < share_removed(1.2136, 1.1354) < high
+    assert rule.earns(1.2136, 1.1354, 1.081) and not rule.firm(1.2136, 1.1354, 0.919, 1.081)
+    assert rule.firm(1.840, 1.135, 0.919, 1.081)
+    assert rule.earns(21.414, 15.213, 1.171) and not rule.firm(21.414, 15.213, 0.829, 1.171)
+    # the model without it within the band: neither earning nor firm, the upper share unbounded
+    assert share_over_noise_band(1.1, 1.0, 0.9, 1.1)[1] == math.inf and not rule.firm(1.1, 1.0, 0.9, 1.1)
 
 
 def test_a_real_coupling_earns_its_place_held_out_whatever_it_gains_in_sample():
@@ -413,3 +434,16 @@ def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_loa
     doc |= {"status": "unexplained", "verdict": "unexplained", "gap_before": {"heldout_rms_over_noise": 1.13},
             "gap_after": {"heldout_rms_over_noise": 1.13}}
     assert score_row(4, ["load_torque"], doc)["predicted"] == "unexplained"
+
+
+def test_the_report_says_which_names_are_not_firm_and_their_shares_over_the_band():
+    from benchmark.problems.timedomain.diagnosis.run import not_firm_lines
+
+    doc = {"rule": {"selection_share": 0.3},
+           "per_effect": [{"effect": "leakage_saturation", "firm": True, "share_over_noise_band": [0.71, 1.05]},
+                          {"effect": "sensor_offset", "firm": False, "share_over_noise_band": [0.2145, 1.7725]},
+                          {"effect": "iron_loss", "firm": False, "share_over_noise_band": [0.1, math.inf]}]}
+    lines = not_firm_lines(doc)
+    assert len(lines) == 2 and lines[0].startswith("**Not firm: sensor_offset.**")
+    assert "removes 21 % to 177 % of the excess" in lines[0] and "against the rule's 30 %" in lines[0]
+    assert "removes 10 % or more" in lines[1]

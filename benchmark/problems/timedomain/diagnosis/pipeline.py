@@ -46,7 +46,7 @@ from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointMode
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
 from benchmark.problems.timedomain.diagnosis.input_noise import with_voltage_noise
 from benchmark.problems.timedomain.diagnosis.localise import localise
-from benchmark.problems.timedomain.diagnosis.rule import STATUSES, Rule, status_of
+from benchmark.problems.timedomain.diagnosis.rule import STATUSES, Rule, share_over_noise_band, status_of
 from benchmark.problems.timedomain.diagnosis.scales import (
     base_context,
     estimated_rated_torque,
@@ -180,7 +180,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
         return misfit_ratio(held, unit_noise(noise_all.rel_uncertainty, noise_all.n_effective),
                             k=settings.band_k, bias_floor=settings.band_floor)
 
-    band = quality(sel.memo[frozenset()].held_used).threshold
+    band_quality = quality(sel.memo[frozenset()].held_used)  # the band every decision uses
+    band = band_quality.threshold
     candidates, excluded = screen(effects, facts)
     final, full_x, withouts, order, pruned, rounds = sel.memo[frozenset()], None, {}, [], [], []
     if sel.memo[frozenset()].chi2 > band**2 and settings.max_effects != 0:
@@ -200,9 +201,12 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     for name in order:
         j = final.names.index(name)
         own = (withouts[name].chi2 - final.chi2) / excess if excess > 0 else 0.0
+        without = withouts[name].chi2
         per_effect.append({"effect": name, "drop_one_share": float(own),
-                           "share_beside_the_others": float((withouts[name].chi2 - final.chi2)
-                                                            / max(withouts[name].chi2 - 1.0, 1e-300)),
+                           "share_beside_the_others": float((without - final.chi2) / max(without - 1.0, 1e-300)),
+                           "share_over_noise_band": list(share_over_noise_band(without, final.chi2,
+                                                                               band_quality.lower, band)),
+                           "firm": rule.firm(without, final.chi2, band_quality.lower, band),
                            "parameters": _parameters(final.model, full_x, se, j),
                            "physical": final.model.effects[j].describe_fit(full_x[final.model.slices[j]], ctx)})
     indist = [[r["chosen"]] + r["indistinguishable"] for r in rounds if r.get("chosen") and r["indistinguishable"]]

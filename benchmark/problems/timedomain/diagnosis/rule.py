@@ -62,6 +62,18 @@ def share_removed(without: float, with_: float) -> float:
     return float((without - with_) / excess) if excess > 0 else 0.0
 
 
+def share_over_noise_band(without: float, with_: float, lower: float, upper: float) -> tuple[float, float]:
+    """The range of ``D`` (:func:`share_removed`) when the noise floor, 1 in ``D``'s excess, is
+    anywhere in the band's ``[lower^2, upper^2]`` (``lower``, ``upper``: the band's edges of the
+    held-out RMS over noise): the share an effect removes is only as sure as the noise estimate
+    it is measured against. ``(D at lower^2, D at upper^2)``, the second ``inf`` where the model
+    without the effect is within the band."""
+    gain = without - with_
+    low = gain / (without - lower**2) if without > lower**2 else math.inf
+    high = gain / (without - upper**2) if without > upper**2 else math.inf
+    return float(low), float(high)
+
+
 @dataclass(frozen=True)
 class Rule:
     """The selection rule. ``share``: ``tau``, the share of the excess an effect must remove."""
@@ -73,6 +85,14 @@ class Rule:
         is above the noise band ``band`` (upper edge of the held-out RMS over noise) and the
         effect removes at least :attr:`share` of its excess (``with_``: the model with it)."""
         return bool(without > band**2 and share_removed(without, with_) >= self.share)
+
+    def firm(self, without: float, with_: float, lower: float, upper: float) -> bool:
+        """Whether an effect earns its place wherever the noise floor lies in its band (edges
+        ``lower``, ``upper`` of the held-out RMS over noise; :func:`share_over_noise_band`): the
+        model without it above the band and the lowest of its shares at least :attr:`share`.
+        Reported beside a verdict, not deciding it: a name that is not firm is one a noise
+        estimate a few per cent off would not have given."""
+        return bool(without > upper**2 and share_over_noise_band(without, with_, lower, upper)[0] >= self.share)
 
     def earns_fit(self, without, with_, band: float) -> bool:
         """:meth:`earns` between two fitted sets (their held-out ``chi2``, :class:`.set_fit.SetFit`):

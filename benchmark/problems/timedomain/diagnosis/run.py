@@ -202,6 +202,7 @@ def render_markdown(doc: dict) -> str:
                          f"| {100 * pe['share_beside_the_others']:.0f} % | {par} |")
         lines.append(f"\nAn effect earns its place when the model without it is above the noise band and it removes "
                      f"at least {100 * doc['rule']['selection_share']:.0f} % of the excess that model leaves.")
+        lines += not_firm_lines(doc)
         lines.append("")
     base = doc.get("base") or {}
     if base.get("estimate"):
@@ -277,3 +278,19 @@ def render_markdown(doc: dict) -> str:
                           for k, v in doc["noise"].items()),
               "", f"Wall time: {doc['wall_time_s']:.1f} s (CPU {doc.get('cpu_time_s', float('nan')):.1f} s).", ""]
     return "\n".join(lines)
+
+
+def not_firm_lines(doc: dict) -> list[str]:
+    """A line for each named effect that is not firm (:meth:`.rule.Rule.firm`): its share
+    beside the others as the noise floor moves within its band, against the rule's share."""
+    out = []
+    for pe in doc["per_effect"]:
+        if pe.get("firm", True):
+            continue
+        low, high = pe["share_over_noise_band"]
+        span = f"{100 * low:.0f} % to {100 * high:.0f} %" if math.isfinite(high) else f"{100 * low:.0f} % or more"
+        out.append(f"**Not firm: {pe['effect']}.** Beside the others it removes {span} of the excess as the noise "
+                   f"floor moves within its band (the noise estimate's own uncertainty), against the rule's "
+                   f"{100 * doc['rule']['selection_share']:.0f} %: a noise estimate a few per cent off would not "
+                   f"have named it, and the data do not settle it.")
+    return out
