@@ -223,7 +223,9 @@ class Diagnosis(_Document):
     def not_firm(self) -> list[str]:
         """The named effects that are not firm: they would not earn their place were the noise
         floor elsewhere in its band (a noise estimate a few per cent off); the data do not settle them."""
-        return [pe["effect"] for pe in self.per_effect if not pe.get("firm", True)]
+        from benchmark.problems.timedomain.diagnosis.named import not_firm_effects
+
+        return not_firm_effects({"per_effect": self.per_effect})
 
     def __str__(self) -> str:
         return self.report

@@ -49,7 +49,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from benchmark.analysis.blind_report import render, summarise, wilson  # noqa: F401  (re-exported)
 from benchmark.core.effects import load_effects
 from benchmark.core.io import write_text_atomic, write_yaml_atomic
-from benchmark.problems.timedomain.diagnosis.named import held_effects, named_effects
+from benchmark.problems.timedomain.diagnosis.named import held_effects, named_effects, not_firm_effects
 
 MOTOR_KEYS = ("Rs", "Ls", "Le", "Rr", "J", "fv")
 #: Effects a time-domain base model of case 2 already holds (never an injected "effect").
@@ -363,7 +363,7 @@ def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
             "predicted": label_of(named) if named else predicted_label(doc), "status": doc["status"],
             "verdict": doc["verdict"], "effects": named,
             "conditioned": list(doc.get("removed_by_conditioning", [])), "held_by_base": held_effects(doc),
-            "not_firm": [pe["effect"] for pe in doc.get("per_effect", []) if not pe.get("firm", True)],
+            "not_firm": not_firm_effects(doc),
             "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),

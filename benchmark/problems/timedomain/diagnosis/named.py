@@ -32,3 +32,10 @@ def named_effects(doc: Mapping) -> list[str]:
         if e not in out:
             out.append(e)
     return out
+
+
+def not_firm_effects(doc: Mapping) -> list[str]:
+    """The chosen effects of ``doc`` that are not firm (``per_effect``'s ``firm``,
+    :meth:`.rule.Rule.firm`): a noise estimate within its band would not have named them. An
+    older document without ``firm`` has none."""
+    return [pe["effect"] for pe in doc.get("per_effect") or [] if not pe.get("firm", True)]

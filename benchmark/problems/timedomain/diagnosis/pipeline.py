@@ -200,8 +200,8 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
     se = final.model.standard_errors(full_x) if order else None
     for name in order:
         j = final.names.index(name)
-        own = (withouts[name].chi2 - final.chi2) / excess if excess > 0 else 0.0
         without = withouts[name].chi2
+        own = (without - final.chi2) / excess if excess > 0 else 0.0
         per_effect.append({"effect": name, "drop_one_share": float(own),
                            "share_beside_the_others": float((without - final.chi2) / max(without - 1.0, 1e-300)),
                            "share_over_noise_band": list(share_over_noise_band(without, final.chi2,
