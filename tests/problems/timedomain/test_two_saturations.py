@@ -87,7 +87,7 @@ def test_a_saturating_leakage_keeps_the_inverse_gamma_node():
 
 def test_both_saturations_fit_together():
     """Measured: mean squares (noise units) base 8.67, leakage alone 5.95, main alone 5.91, both
-    2.27 (5.91 before: the pair was the main saturation alone), the plant's floor without
+    2.30 (5.91 before: the pair was the main saturation alone), the plant's floor without
     effects ~1; each fit to 200 evaluations (at 40, a Zen 5 machine's rounding left the pair at
     27.1, above the base: a fit cut short). The pair removes about 60 % of the excess, not all:
     the plant saturates its magnetising branch between the two leakages, and beside a saturating
