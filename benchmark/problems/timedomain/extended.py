@@ -76,11 +76,11 @@ def _armature(c):
 
 
 @compiled(_nrt=False, inline="always")
-def _loads(c, t, w_mech, w_lag):
-    """(passive Coulomb-like load torque, speed-dependent load torque) at time t, N m.
-    ``w_lag``: the load speed through the armature's first-order lag over ``w_ref`` (the
-    state :func:`_armature` rows carry; a DC generator's current follows its EMF with
-    ``L_a/R_a``), the speed share's drive there."""
+def _loads(c, env, w_mech, w_lag):
+    """(passive Coulomb-like load torque, speed-dependent load torque), N m, at a time when the
+    switched load's envelope is ``env`` (:func:`_envelope`). ``w_lag``: the load speed through
+    the armature's first-order lag over ``w_ref`` (the state :func:`_armature` rows carry; a DC
+    generator's current follows its EMF with ``L_a/R_a``), the speed share's drive there."""
     t_pass = c[25]
     t_dyn = 0.0
     if c[26] != 0.0:
@@ -88,7 +88,6 @@ def _loads(c, t, w_mech, w_lag):
         t_dyn = c[26] * q * abs(q)
     T_s = c[28]
     if T_s != 0.0:
-        env = _switched(t, c[29], c[30], c[42], c[43])
         share = c[41]
         t_pass += T_s * env * (1.0 - share)
         u = w_lag if _armature(c) else w_mech / c[27]
@@ -106,6 +105,17 @@ def _brake_law(u, r):
         return u
     ru = r * u
     return u * (1.0 + r * r) / (1.0 + ru * ru)
+
+
+@compiled(_nrt=False, inline="always")
+def _envelope(c, t):
+    """The switched load's envelope (0-1, :func:`_switched`) of row ``c`` at time ``t`` (s); 0
+    where the row has no switched load (its envelope is then never read). The stepper computes
+    it once per distinct time of a step (the RK4 stages at the middle share one) and hands it
+    to :func:`_derivative` and :func:`_stick`."""
+    if c[28] == 0.0:
+        return 0.0
+    return _switched(t, c[29], c[30], c[42], c[43])
 
 
 @compiled(_nrt=False, inline="always")
@@ -199,8 +209,10 @@ def _row_constants(c, th, pre):
     pre[7] = 1.0 / c[2]
 
 
-@compiled(_nrt=False)
-def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm, pre):
+@compiled(_nrt=False, inline="always")
+def _derivative(c, x, v_a, v_b, direction, dir_l, env, out, tm, pre):
+    """The states' derivatives at ``x`` into ``out`` (and the stator branch current); ``env``: the
+    switched load's envelope at the time (:func:`_envelope`). Returns the motor's torque (N m)."""
     Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
     gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
     Ud, i0, h_th, alpha, J, fv, fc, p = c[13], c[14], c[15], c[16], c[17], c[18], c[19], c[20]
@@ -287,12 +299,12 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, t, out, tm, pre):
         t_sh = _coupling_torque(x[9], wm - wl, c[32], c[33], c[37], c[44])
         drive_m = t_m - t_sh - fv * wm
         out[6] = pre[5] * (drive_m - _resist(direction, drive_m, fc))
-        t_pass, t_dyn = _loads(c, t, wl, x[12])
+        t_pass, t_dyn = _loads(c, env, wl, x[12])
         drive_l = t_sh - t_dyn
         out[8] = (drive_l - _resist(dir_l, drive_l, t_pass)) / J_l
         out[9] = wm - wl
     else:
-        t_pass, t_dyn = _loads(c, t, w / p, x[12])
+        t_pass, t_dyn = _loads(c, env, w / p, x[12])
         fct = fc + t_pass
         t_d = t_m - t_dyn
         if direction != 0.0:
@@ -358,13 +370,14 @@ def _sign(v):
 
 
 @compiled(_nrt=False)
-def _stick(c, x, w0, wl0, t, tm):
-    """After a step: a speed that crossed zero against its Coulomb torque sticks at zero."""
+def _stick(c, x, w0, wl0, env, tm):
+    """After a step: a speed that crossed zero against its Coulomb torque sticks at zero (``env``:
+    the switched load's envelope at the step's end, :func:`_envelope`)."""
     p = c[20]
     fc = c[19]
     two = c[31] > 0.0
     if two:
-        t_pass, t_dyn = _loads(c, t, x[8], x[12])
+        t_pass, t_dyn = _loads(c, env, x[8], x[12])
         if fc > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
             ia2, ib2 = _stator_current(c, x, tm)
             t_m = 1.5 * p * (x[0] * ib2 - x[1] * ia2)
@@ -376,7 +389,7 @@ def _stick(c, x, w0, wl0, t, tm):
             if abs(t_sh - t_dyn) <= t_pass:
                 x[8] = 0.0
         return
-    t_pass, t_dyn = _loads(c, t, 0.0, x[12])
+    t_pass, t_dyn = _loads(c, env, 0.0, x[12])
     fct = fc + t_pass
     if fct > 0.0 and w0 != 0.0 and x[6] * w0 <= 0.0:
         ia2, ib2 = _stator_current(c, x, tm)
@@ -433,22 +446,26 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
             wl0 = x[8]
             d = _sign(w0)
             dl = _sign(wl0)
-            _derivative(c, x, va0, vb0, d, dl, ts, k1, tm, pre)
-            if j == 0 and not own:
-                out[0, k] = k1[N_STATES]
-                out[1, k] = k1[N_STATES + 1]
-            for s in range(ns):
-                xt[s] = x[s] + 0.5 * hs * k1[s]
-            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k2, tm, pre)
-            for s in range(ns):
-                xt[s] = x[s] + 0.5 * hs * k2[s]
-            _derivative(c, xt, vam, vbm, d, dl, ts + 0.5 * hs, k3, tm, pre)
-            for s in range(ns):
-                xt[s] = x[s] + hs * k3[s]
-            _derivative(c, xt, va1, vb1, d, dl, ts + hs, k4, tm, pre)
+            env0 = _envelope(c, ts)
+            envm = _envelope(c, ts + 0.5 * hs)
+            env1 = _envelope(c, ts + hs)
+            # the four stages through one (inlined) call of the derivative: k1 at x, k2 and k3 at
+            # xt = x + 0.5 hs k1 and x + 0.5 hs k2 (the middle), k4 at xt = x + hs k3 (the end)
+            for st in range(4):
+                y, va, vb, e = x, va0, vb0, env0
+                if st > 0:
+                    kp = work[st]  # the previous stage's derivative
+                    f = hs if st == 3 else 0.5 * hs
+                    for s in range(ns):
+                        xt[s] = x[s] + f * kp[s]
+                    y, va, vb, e = (xt, va1, vb1, env1) if st == 3 else (xt, vam, vbm, envm)
+                _derivative(c, y, va, vb, d, dl, e, work[st + 1], tm, pre)
+                if st == 0 and j == 0 and not own:
+                    out[0, k] = k1[N_STATES]
+                    out[1, k] = k1[N_STATES + 1]
             for s in range(ns):
                 x[s] = x[s] + hs / 6.0 * (k1[s] + 2.0 * (k2[s] + k3[s]) + k4[s])
-            _stick(c, x, w0, wl0, ts + hs, tm)
+            _stick(c, x, w0, wl0, env1, tm)
         m = 0.0
         for s in range(ns):
             m = max(m, abs(x[s]))

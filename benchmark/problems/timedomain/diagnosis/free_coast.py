@@ -154,42 +154,96 @@ def _decayed(w0, offset, decay):
     return w
 
 
+#: Rows of a brake coast integrated side by side (their chains of operations overlap in the core).
+LANES = 8
+
+
 @numba.njit(cache=True, nogil=True)
 def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
     """Speed (n, N) of the coast ``J w' = -(A + fv w + C w^2 + T_b h(u))`` at times ``t`` (N,)
     from ``w0`` (n,), ``u`` the speed over ``w_ref`` through a first-order lag ``tau`` (0: none)
     starting at ``w0 / w_ref``, ``h`` the kernel's law (``extended._brake_law``); 0 once stopped (each
-    argument but ``t`` an (n,) column of the rows)."""
+    argument but ``t`` an (n,) column of the rows). Each row takes ``sub`` Heun steps per sample;
+    rows with the same ``sub`` are integrated side by side in groups of :data:`LANES`
+    (:func:`_brake_lanes`), each by its own operations, so a row's speed does not depend on the
+    others."""
     n, m = len(w0), len(t)
     w = np.zeros((n, m))
     dt_max = 0.0
     for j in range(1, m):
         dt_max = max(dt_max, t[j] - t[j - 1])
+    subs = np.empty(n, np.int64)
     for k in range(n):
-        x, ul = w0[k], w0[k] / w_ref[k]
+        x = w0[k]
         inv_J, inv_w = 1.0 / J[k], 1.0 / w_ref[k]
-        lag = tau[k] > 0.0
-        # the fastest mechanical rate: the law's slope is at most (1 + r^2) at u = 0
+        # sub-steps: a tenth of the fastest mechanical time constant (the law's slope is at most
+        # (1 + r^2) at u = 0) and half the lag's
         rate = (fv[k] + T_b[k] * (1.0 + r[k] * r[k]) * inv_w + 2.0 * C[k] * max(x, 0.0)) * inv_J
         sub = max(1, int(math.ceil(10.0 * dt_max * rate)))
-        if lag:
+        if tau[k] > 0.0:
             sub = max(sub, int(math.ceil(2.0 * dt_max / tau[k])))
-        sub = min(sub, 200)
-        w[k, 0] = x
-        for j in range(1, m):
-            if not x > 0.0:
-                break
-            h = (t[j] - t[j - 1]) / sub
-            a = math.exp(-h / tau[k]) if lag else 0.0
-            for _ in range(sub):
-                u0 = ul if lag else x * inv_w
-                d0 = -(A[k] + fv[k] * x + C[k] * x * x + T_b[k] * _brake_law(u0, r[k])) * inv_J
-                xp = x + h * d0
-                u1 = (ul * a + xp * inv_w * (1.0 - a)) if lag else xp * inv_w
-                d1 = -(A[k] + fv[k] * xp + C[k] * xp * xp + T_b[k] * _brake_law(u1, r[k])) * inv_J
-                x_new = x + 0.5 * h * (d0 + d1)
-                if lag:
-                    ul = ul * a + 0.5 * (x + x_new) * inv_w * (1.0 - a)
-                x = x_new
-            w[k, j] = x
+        subs[k] = min(sub, 200)
+    order = np.argsort(subs, kind="mergesort")
+    i = 0
+    while i < n:
+        e = i + 1
+        while e < n and e - i < LANES and subs[order[e]] == subs[order[i]]:
+            e += 1
+        _brake_lanes(t, order[i:e], subs[order[i]], w0, J, fv, A, C, T_b, w_ref, r, tau, w)
+        i = e
     return w
+
+
+@numba.njit(cache=True, nogil=True)
+def _brake_lanes(t, rows, sub, w0, J, fv, A, C, T_b, w_ref, r, tau, w):
+    """Rows ``rows`` of :func:`_brake_coast` (into ``w``), ``sub`` steps per sample, side by side: each
+    row's chain of operations is its own (the lag's ``exp(-h/tau)`` computed again only when the
+    sub-step ``h`` changes)."""
+    L = len(rows)
+    x = np.empty(L)
+    ul = np.empty(L)
+    inv_J = np.empty(L)
+    inv_w = np.empty(L)
+    a = np.zeros(L)
+    lag = np.empty(L, np.bool_)
+    alive = np.ones(L, np.bool_)
+    for l in range(L):
+        k = rows[l]
+        x[l], ul[l] = w0[k], w0[k] / w_ref[k]
+        inv_J[l], inv_w[l] = 1.0 / J[k], 1.0 / w_ref[k]
+        lag[l] = tau[k] > 0.0
+        w[k, 0] = x[l]
+    h_was = -1.0
+    m = len(t)
+    for j in range(1, m):
+        h = (t[j] - t[j - 1]) / sub
+        if h != h_was:
+            for l in range(L):
+                if lag[l]:
+                    a[l] = math.exp(-h / tau[rows[l]])
+            h_was = h
+        left = 0
+        for l in range(L):
+            if alive[l] and not x[l] > 0.0:
+                alive[l] = False
+            left += alive[l]
+        if left == 0:
+            break
+        for _ in range(sub):
+            for l in range(L):
+                if not alive[l]:
+                    continue
+                k = rows[l]
+                xl = x[l]
+                u0 = ul[l] if lag[l] else xl * inv_w[l]
+                d0 = -(A[k] + fv[k] * xl + C[k] * xl * xl + T_b[k] * _brake_law(u0, r[k])) * inv_J[l]
+                xp = xl + h * d0
+                u1 = (ul[l] * a[l] + xp * inv_w[l] * (1.0 - a[l])) if lag[l] else xp * inv_w[l]
+                d1 = -(A[k] + fv[k] * xp + C[k] * xp * xp + T_b[k] * _brake_law(u1, r[k])) * inv_J[l]
+                x_new = xl + 0.5 * h * (d0 + d1)
+                if lag[l]:
+                    ul[l] = ul[l] * a[l] + 0.5 * (xl + x_new) * inv_w[l] * (1.0 - a[l])
+                x[l] = x_new
+        for l in range(L):
+            if alive[l]:
+                w[rows[l], j] = x[l]
