@@ -481,12 +481,14 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
 
 @compiled(nogil=True)
 def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
-    """Rows ``start..stop-1`` of ``rows`` into ``out`` (left NaN for invalid rows); releases the GIL."""
+    """Rows ``start..stop-1`` of ``rows`` into ``out`` (every entry written: NaN for invalid rows);
+    releases the GIL."""
     work = np.empty((8, N_WORK))
     x0 = np.empty(N_STATES)
     for m in range(start, stop):
         c = rows[m]
         if not np.isfinite(c[0]):
+            out[m] = np.nan
             continue
         x0[:] = 0.0
         _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0, work, True)
@@ -498,7 +500,7 @@ def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
     rows run in parallel blocks (:func:`~benchmark.problems.timedomain.kernel_pool.run_split`);
     a row's outputs do not depend on the blocks."""
     rows, v_a, v_b = (np.ascontiguousarray(a, dtype=float) for a in (rows, v_a, v_b))
-    out = np.full((rows.shape[0], 3, v_a.shape[0]), np.nan)
+    out = np.empty((rows.shape[0], 3, v_a.shape[0]))  # the blocks write every entry
     run_split(_simulate_block, rows.shape[0], rows, v_a, v_b, bool(linear), float(h), int(substeps), out)
     return out
 
