@@ -36,9 +36,14 @@ def summarise(rows: list[dict]) -> dict:
     both = [r for r in two if set(r["truth_effects"]) <= set(r["effects"])]
     shares = [r["explained_share"] for r in eff_correct]
     # names the rule gave but a noise estimate within its band would not (Rule.firm), right or not
-    named = [(e, e in r["truth_effects"]) for r in scored for e in r["effects"]
-             if e not in r.get("conditioned", []) and e not in r.get("held_by_base", [])]
+    named = [(e, e in r["truth_effects"]) for r in scored for e in _rule_names(r)]
     not_firm = [(e, e in r["truth_effects"]) for r in scored for e in r.get("not_firm", [])]
+    # false selections: scored sets where the rule named an effect that was not injected
+    falsely = [r for r in scored if any(e not in r["truth_effects"] for e in _rule_names(r))]
+    # the catch-all: channel_delay named on sets where it was not injected (every set made: the
+    # diagnosis may name it on a set left out of the other scores too)
+    no_delay = [r for r in rows_made if "channel_delay" not in r.get("injected", r["truth"]).split("+")]
+    delay_named = [r for r in no_delay if "channel_delay" in r["effects"]]
     labels = sorted({r["truth"] for r in rows} | {r["predicted"] for r in rows},
                     key=lambda s: (s in ("none", "unexplained"), s.count("+"), s))
     idx = {k: i for i, k in enumerate(labels)}
@@ -72,7 +77,16 @@ def summarise(rows: list[dict]) -> dict:
         "statuses": statuses, "labels": labels, "confusion": cm.tolist(),
         "names_right": sum(ok for _, ok in named), "names_wrong": sum(not ok for _, ok in named),
         "not_firm_right": sum(ok for _, ok in not_firm), "not_firm_wrong": sum(not ok for _, ok in not_firm),
+        "false_selection_sets": len(falsely), "false_selection_ci95": wilson(len(falsely), len(scored)),
+        "channel_delay_not_injected": len(no_delay), "channel_delay_named": len(delay_named),
+        "channel_delay_ci95": wilson(len(delay_named), len(no_delay)),
     }
+
+
+def _rule_names(row: dict) -> list[str]:
+    """The effects of a verdict that the selection rule named (not those the conditioning on
+    load removed, nor those the base model holds)."""
+    return [e for e in row["effects"] if e not in row.get("conditioned", []) and e not in row.get("held_by_base", [])]
 
 
 def _pct(x):

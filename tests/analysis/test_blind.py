@@ -3,6 +3,7 @@ out when invisible) and the draws (effect-free and two-effect shares, the truth 
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -422,3 +423,40 @@ def test_a_set_that_raises_is_kept_as_a_row_the_draw_goes_on_and_resume_tries_it
     assert diagnosed == [1, 2] and summary["failed_sets"] == [] and summary["scored"] == 4
     rows = [json.loads(x) for x in (tmp_path / "work" / "plant" / "rows.jsonl").read_text().splitlines()]
     assert [r["index"] for r in rows] == [0, 1, 2, 3, 1, 2]
+
+
+def test_false_selections_and_channel_delay_are_counted_by_the_rules_names():
+    rows = [
+        _row(0, [], "no_gap", [], gap=1.0),
+        _row(1, ["double_cage"], "explained", ["double_cage", "channel_delay"]),  # a false selection, the catch-all
+        _row(2, ["channel_delay"], "explained", ["channel_delay"]),  # injected: not counted against it
+        _row(3, ["iron_loss"], "explained", ["iron_loss", "sensor_offset"]),  # the offset removed by conditioning
+        _row(4, ["main_saturation"], "explained", ["main_saturation"]),
+        _row(5, ["iron_loss"], "no_gap", ["channel_delay"], gap=1.01),  # left out of the scores, not of the catch-all
+    ]
+    rows[3]["conditioned"] = ["sensor_offset"]
+    rows[5]["invisible"] = True
+    s = summarise(rows)
+    assert s["scored"] == 5 and s["false_selection_sets"] == 1
+    assert s["channel_delay_not_injected"] == 5 and s["channel_delay_named"] == 2
+    assert s["names_wrong"] == 1 and s["names_right"] == 4
+
+
+def test_pooled_draws_are_scored_as_one_set_of_rows(tmp_path, capsys):
+    from benchmark.analysis import blind_pool
+
+    a = [_row(0, [], "no_gap", [], gap=1.0), _row(1, ["double_cage"], "explained", ["double_cage"])]
+    b = [_row(0, [], "explained", ["iron_loss"]), _row(1, ["iron_loss", "two_mass"], "explained", ["two_mass"])]
+    for name, rows in (("d1", a), ("d2", b)):
+        (tmp_path / name / "plant").mkdir(parents=True)
+        (tmp_path / name / "plant" / "blind.json").write_text(json.dumps({"sets": rows}))
+    pooled = blind_pool.pooled([tmp_path / "d1", tmp_path / "d2"])
+    assert list(pooled) == ["plant"]
+    s = pooled["plant"]
+    assert (s["effect_sets_exact"], s["effect_sets"], s["false_alarms"], s["effect_free_sets"]) == (1, 2, 1, 2)
+    assert (s["both_named"], s["two_effect_sets"], s["false_selection_sets"], s["scored"]) == (0, 1, 1, 4)
+    blind_pool.main([str(tmp_path / "d1"), str(tmp_path / "d2")])
+    out = capsys.readouterr().out
+    assert "| plant | 1/2, 50 % (9-91 %) | 1/2, 50 % (9-91 %) | 0/1, 0 % (0-79 %) | 1/4, 25 % (5-70 %) |" in out
+    with pytest.raises(SystemExit, match="no SOURCE/blind.json"):
+        blind_pool.main([str(tmp_path)])
