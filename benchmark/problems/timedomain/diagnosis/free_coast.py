@@ -34,7 +34,7 @@ import math
 import numba
 import numpy as np
 
-from benchmark.problems.timedomain.extended import _brake_law
+from benchmark.problems.timedomain.extended_mechanics import _brake_law
 
 
 class FreeCoast:
@@ -162,7 +162,7 @@ LANES = 8
 def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
     """Speed (n, N) of the coast ``J w' = -(A + fv w + C w^2 + T_b h(u))`` at times ``t`` (N,)
     from ``w0`` (n,), ``u`` the speed over ``w_ref`` through a first-order lag ``tau`` (0: none)
-    starting at ``w0 / w_ref``, ``h`` the kernel's law (``extended._brake_law``); 0 once stopped (each
+    starting at ``w0 / w_ref``, ``h`` the kernel's law (``extended_mechanics._brake_law``); 0 once stopped (each
     argument but ``t`` an (n,) column of the rows). Each row takes ``sub`` Heun steps per sample;
     rows with the same ``sub`` are integrated side by side in groups of :data:`LANES`
     (:func:`_brake_lanes`), each by its own operations, so a row's speed does not depend on the
