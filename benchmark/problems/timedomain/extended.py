@@ -77,13 +77,6 @@ def _drop_sign(i, i0):
     return 0.0
 
 
-
-
-
-
-
-
-
 @compiled(_nrt=False, inline="always")
 def _loop_current(R, gain, p_a, p_b, pm_a, pm_b, L):
     """Current (A) of a rotor loop of resistance ``R`` (ohm; 0: absent, no current) and leakage
