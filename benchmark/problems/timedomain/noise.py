@@ -233,13 +233,45 @@ def noise_from_modulated_periodic(x, fs: float, f0: float, order: int = 2, n_har
 
 def modulated_periodic_noise(x, fs: float, f0: float, order: int = 2, n_harmonics: int | None = None,
                              rel_line: float = 1e-3, knot_periods: float | None = None,
-                             harmonics: str | Sequence[int] = "all") -> tuple[NoiseEstimate, np.ndarray]:
-    """:func:`noise_from_modulated_periodic` and the residual it is the spread of (one fit)."""
+                             harmonics: str | Sequence[int] = "all") -> tuple[NoiseEstimate, np.ndarray, np.ndarray]:
+    """:func:`noise_from_modulated_periodic`, the residual it is the spread of (one fit), and the
+    share of a white noise's power that residual keeps at each frequency of its FFT
+    (:func:`residual_share`: the fit took out the bands about DC and each harmonic it kept)."""
     e, om, kept = modulated_periodic_residual(x, fs, f0, order, n_harmonics, rel_line, knot_periods, harmonics)
     phi = ar1_coefficient(e)
     p_eff = min(float(np.sum(ar1_gain(phi, om))), len(e) / 2)
     envelope = f"order {order}" if knot_periods is None else f"piecewise linear, knots every {knot_periods:g} periods"
-    return estimate_noise(e, p_eff, f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)"), e
+    est = estimate_noise(e, p_eff, f"periodic fit, amplitudes drifting ({envelope}; {f0:.4f} Hz, {kept} harmonics)")
+    share = residual_share(len(e), om, order) if knot_periods is None else np.ones(len(e) // 2 + 1)
+    return est, e, share
+
+
+#: Bins about a fitted frequency over which :func:`residual_share` counts its leverage.
+SHARE_BINS = 24
+
+
+def residual_share(n: int, om: np.ndarray, order: int) -> np.ndarray:
+    """(n//2 + 1,) the expected share of a white noise's power that the residual of
+    :func:`modulated_periodic_residual` (``n`` samples, polynomial envelopes of ``order``, its
+    columns' frequencies ``om`` in rad per sample) keeps at each frequency of its real FFT:
+    ``1 - leverage``, the leverage of the fit's columns at that frequency. The envelopes of one
+    frequency span the polynomials of degree ``order``; their orthonormal basis's spectral window,
+    shifted to each fitted frequency (and its mirror), is what that frequency's columns remove
+    (columns at distinct frequencies are near orthogonal over a record of many periods)."""
+    tau = np.linspace(-1.0, 1.0, n)
+    q, _ = np.linalg.qr(np.column_stack([tau**k for k in range(order + 1)]))
+    t = np.arange(n)
+    bins = np.arange(n // 2 + 1)
+    lev = np.zeros(len(bins))
+    for w in np.unique(np.round(np.asarray(om, float), 12)):
+        centre = w / (2 * np.pi) * n  # in bins of the FFT
+        for c in (centre, -centre) if w > 0 else (centre,):
+            near = bins[np.abs(bins - c) <= SHARE_BINS]  # the window's tail beyond: below 1e-3
+            if not len(near):
+                continue
+            phase = np.exp(-2j * np.pi * np.outer(near - c, t) / n)  # the DTFT at the bins' offsets
+            lev[near] += np.sum(np.abs(phase @ q) ** 2, axis=1) / n
+    return np.clip(1.0 - lev, 0.0, 1.0)
 
 
 def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndarray, i_beta: np.ndarray) -> int:

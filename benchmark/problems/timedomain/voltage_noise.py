@@ -53,8 +53,10 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
     is: the pre-trigger's spread where there is one, else what the drifting-harmonics fit of the
     steady state leaves (the grid's harmonics, unbalance and slow dips are signal, not noise).
     Also returns that noise itself (the quiet segment less its mean, or the fit's residual),
-    whose spectrum, not only its spread, decides what it does to the model (empty when the
-    fourth-difference fallback was used)."""
+    whose spectrum, not only its spread, decides what it does to the model, each with the share of
+    a white noise's power it keeps at each frequency of its FFT (None for a quiet segment; for a
+    fit's residual, :func:`~benchmark.problems.timedomain.noise.residual_share`); empty when the
+    fourth-difference fallback was used."""
     n = len(t)
     fs = 1.0 / float(np.median(np.diff(t)))
     v_floor = 1e-5 * float(np.max(np.hypot(v_alpha, v_beta)))
@@ -62,6 +64,7 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
     k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
     out: dict[str, NoiseEstimate] = {}
     templates: dict[str, np.ndarray] = {}
+    shares: dict[str, np.ndarray] = {}
     has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
     k_ss = steady_start(speed if has_speed else None, n, max(int(fs / supply_frequency), 1))
     for ch, x in chans.items():
@@ -72,11 +75,11 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
                 continue
             if (n - k_ss) / fs * supply_frequency < 2:
                 raise ValueError("steady state shorter than two periods")
-            est, templates[ch] = modulated_periodic_noise(x[k_ss:], fs, supply_frequency)
+            est, templates[ch], shares[ch] = modulated_periodic_noise(x[k_ss:], fs, supply_frequency)
             out[ch] = floored(est, x[k_ss:], v_floor)
         except (ValueError, np.linalg.LinAlgError) as exc:
             out[ch] = fallback(x, v_floor, str(exc))
-    return out, templates
+    return out, {ch: (e, shares.get(ch)) for ch, e in templates.items()}
 
 
 def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, v_alpha, v_beta, i_alpha,
@@ -91,10 +94,10 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
     rng = np.random.default_rng(SEED)
     n = len(v_alpha)
     power = {ch: [] for ch in y0}
+    shape = spectral_shape([templates.get(ch) for ch in ("v_alpha", "v_beta")], n, float(np.median(np.diff(t))))
     for _ in range(REALISATIONS):
-        lag, sign = int(rng.integers(0, 1 << 30)), float(rng.choice([-1.0, 1.0]))
-        extra = {ch: realisation(templates.get(ch), vn[ch].std, n, lag, sign, rng) for ch in ("v_alpha", "v_beta")}
-        y = simulate(v_alpha + extra["v_alpha"], v_beta + extra["v_beta"])
+        extra = realisation(shape, [vn["v_alpha"].std, vn["v_beta"].std], n, rng)
+        y = simulate(v_alpha + extra[0], v_beta + extra[1])
         for ch in y0:
             d = y[ch] - y0[ch]
             power[ch].append(float(np.mean(d[np.isfinite(d)] ** 2)))
@@ -121,13 +124,81 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
     return noise, record
 
 
-def realisation(template: np.ndarray | None, std: float, n: int, lag: int, sign: float,
-                rng: np.random.Generator) -> np.ndarray:
-    """``n`` samples of noise of spread ``std``: ``template`` circularly shifted by ``lag``,
-    times ``sign``, repeated to length ``n`` (white when there is no usable template). The same
-    lag for both voltage channels keeps their cross-correlation."""
-    if template is None or len(template) < 16 or not np.std(template) > 0:
-        return std * rng.standard_normal(n)
-    e = np.roll(np.asarray(template, float), lag % len(template))
-    e = np.tile(e, -(-n // len(e)))[:n]
-    return sign * std / float(np.std(e)) * e
+#: Width of the running median that smooths the noise's periodogram (:func:`spectral_shape`), Hz:
+#: wide beside the bands a drifting-harmonics fit removes (a few Hz about DC and each harmonic it
+#: kept), narrow beside the spectrum's own changes (a conditioning's filter, a probe's roll-off).
+SMOOTHING_HZ = 200.0
+
+
+def spectral_shape(templates: list, n: int, sample_time: float) -> np.ndarray | None:
+    """The voltage noise's spectral matrix on the ``n``-sample record's frequency grid, from the
+    measured noise ``templates`` (per voltage channel ``(noise, share)`` from :func:`voltage_noise`,
+    or None; ``sample_time`` in s): (n//2 + 1, 2, 2), each bin's Cholesky factor of the two
+    channels' smoothed auto- and cross-spectra, normalised so that unit white noise has the
+    identity; None where there is no usable template (white realisations).
+
+    Smoothed, not the template itself: where the noise came from a drifting-harmonics fit of the
+    steady state, the fit has taken out the bands about DC and each harmonic it kept, and a
+    realisation that repeats the template lacks them. Those are the bands the machine turns into
+    current error (near DC the stator sees only its resistance and the leakage): on an
+    independent-plant 5 hp grid start with 0.87 V of white noise per phase (plant seed 442 set 0,
+    effect-free), the template's realisations carried 0.039 A into each current where the noise
+    really carried 0.045-0.048 A, and the record sat 11 % above the noise band, `unexplained`.
+    Each periodogram ordinate is divided by the share of the noise's power the fit left there
+    (``share``), the bins it took almost all of left out, and each auto-spectrum is the running
+    median of the rest over :data:`SMOOTHING_HZ` (divided by ln 2, the median of an ordinate
+    over its mean: a spectral line the fit left does not move it); the coherence of the two
+    channels is the running mean of their cross-spectrum over the same width, so that channels
+    made from the same probes (line-to-line voltages) stay correlated."""
+    if any(t is None or len(t[0]) < 16 or not np.std(t[0]) > 0 for t in templates):
+        return None
+    m = min(len(t[0]) for t in templates)
+    X, auto = [], []
+    width = max(int(round(SMOOTHING_HZ * m * sample_time)), 3)  # bins of 1 / (m sample_time) Hz
+    for e, share in templates:
+        x = np.fft.rfft(np.asarray(e, float)[:m] - np.mean(e[:m]))
+        p = np.abs(x) ** 2
+        kept = np.ones(len(p)) if share is None or len(share) != len(p) else np.asarray(share, float)
+        p = np.where(kept > MIN_SHARE, p / np.maximum(kept, MIN_SHARE), np.nan)
+        X.append(x)
+        auto.append(_running(p, width, np.nanmedian) / math.log(2.0))
+    cross = _running(X[0] * np.conj(X[1]), width, np.mean)
+    norm = np.sqrt(_running(np.abs(X[0]) ** 2, width, np.mean) * _running(np.abs(X[1]) ** 2, width, np.mean))
+    rho = np.where(norm > 0, cross / np.maximum(norm, 1e-300), 0.0)
+    rho = rho / np.maximum(1.0, np.abs(rho))
+    f_t = np.fft.rfftfreq(m)  # cycles per sample
+    f_n = np.fft.rfftfreq(n)
+    s_a, s_b = (np.interp(f_n, f_t, a) for a in auto)
+    r = np.interp(f_n, f_t, rho.real) + 1j * np.interp(f_n, f_t, rho.imag)
+    s_a, s_b = s_a / max(float(np.mean(s_a)), 1e-300), s_b / max(float(np.mean(s_b)), 1e-300)
+    L = np.zeros((len(f_n), 2, 2), complex)
+    L[:, 0, 0] = np.sqrt(s_a)
+    L[:, 1, 0] = np.sqrt(s_b) * np.conj(r)
+    L[:, 1, 1] = np.sqrt(s_b) * np.sqrt(np.maximum(1.0 - np.abs(r) ** 2, 0.0))
+    return L
+
+
+#: A periodogram ordinate whose bin kept less than this share of the noise's power (the fit took
+#: the rest) is left out of the smoothed spectrum: too little is left there to scale back.
+MIN_SHARE = 0.1
+
+
+def _running(x: np.ndarray, width: int, stat) -> np.ndarray:
+    """``stat`` (a reduction along axis 1) of ``x`` over a window of ``width`` bins about each
+    bin, the window shortened at the ends."""
+    half = width // 2
+    pad = np.concatenate([x[half:0:-1], x, x[-2:-half - 2:-1]]) if half else x
+    windows = np.lib.stride_tricks.sliding_window_view(pad, 2 * half + 1)
+    return stat(windows, axis=1)
+
+
+def realisation(shape: np.ndarray | None, std: list[float], n: int, rng: np.random.Generator) -> np.ndarray:
+    """Two channels (2, n) of noise with the spectral matrix ``shape`` (:func:`spectral_shape`),
+    each of spread ``std[k]``; white when ``shape`` is None."""
+    z = rng.standard_normal((2, n))
+    if shape is None:
+        return np.asarray(std, float)[:, None] * z
+    Z = np.fft.rfft(z, axis=1)
+    Y = np.einsum("fij,jf->if", shape, Z)
+    e = np.fft.irfft(Y, n, axis=1)
+    return np.asarray(std, float)[:, None] / np.std(e, axis=1, keepdims=True) * e
