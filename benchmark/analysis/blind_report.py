@@ -8,16 +8,9 @@ import math
 
 import numpy as np
 
+from benchmark.core.uncertainty import wilson
 
-def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
-    """Wilson score interval of a proportion k/n (95 % by default)."""
-    if n == 0:
-        return [math.nan, math.nan]
-    p = k / n
-    den = 1 + z**2 / n
-    c = (p + z**2 / (2 * n)) / den
-    h = z * math.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / den
-    return [max(0.0, c - h), min(1.0, c + h)]
+__all__ = ["summarise", "wilson"]
 
 
 def summarise(rows: list[dict]) -> dict:

@@ -114,6 +114,12 @@ class Effect:
         skew), 1 probe compression, 2 offsets, 3 speed sensor; row effects have none.
     FORM_DRAWS : the effect's own random variation of its form (see :meth:`random_form`); a
         YAML may override it with a ``form_draws`` entry.
+    FIRST_FORM : the augmentation's first form: extra parameters held at these values give the
+        form the catalogue had before it was extended to forms a blind draw had shown it could
+        not fit (a tachometer without its filter, a coupling without free play or hardening).
+        Empty where the form was never extended. The calibration of the rule diagnoses form
+        variants with it (:meth:`reduce_to_first_form`): a form the catalogue cannot fit, the
+        way a real machine's can be, without touching the forms kept for the final scoring.
     """
 
     name = "effect"
@@ -128,6 +134,7 @@ class Effect:
     shows_in = ""
     measure_stage = 0
     FORM_DRAWS: list | dict | None = None
+    FIRST_FORM: dict[str, float] = {}
 
     def __init__(self, realistic=None, form_draws=None, **form):
         if realistic is not None:
@@ -138,6 +145,22 @@ class Effect:
         if form_draws is not None:
             self.FORM_DRAWS = _plain(form_draws)
         self.form = {k: _plain(v) for k, v in form.items()}
+        #: Extra parameters held at a value in every fit (name -> value): :meth:`fit_bounds`.
+        self.held: dict[str, float] = {}
+
+    def reduce_to_first_form(self) -> Effect:
+        """Hold the extras of :attr:`FIRST_FORM` in every fit (returns the effect)."""
+        self.held = dict(self.FIRST_FORM)
+        return self
+
+    def fit_bounds(self, ctx: EffectContext) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`extra_bounds` with each held extra (:attr:`held`) fixed at its value, clipped
+        into its box (both bounds there: the local fits then leave it out)."""
+        lo, hi = (np.array(b, dtype=float) for b in self.extra_bounds(ctx))
+        for name, value in self.held.items():
+            k = self.extra_names.index(name)
+            lo[k] = hi[k] = float(np.clip(value, lo[k], hi[k]))
+        return lo, hi
 
     # plant
     def plant(self, row: np.ndarray, size: float, ctx: EffectContext, form: dict | None = None) -> np.ndarray:

@@ -9,7 +9,9 @@ scoring, and their scores are not to be looked at while the diagnosis is being c
 
 Form sets (the ``forms`` key of ``python -m benchmark.blind`` and of ``python -m
 synthetic.independent``): ``development`` (the default: the plant's behaviour before the
-split, draw for draw), ``heldout`` and ``all``.
+split, draw for draw), ``heldout``, ``all`` and ``variants`` (:data:`VARIANTS`: the forms that
+made the catalogue extend its own, for the calibration of the rule; development forms for the
+other effects).
 
 A held-out form may be limited to some scenarios (:data:`SCENARIOS`): a current transformer
 cannot measure the near-DC currents of a V/f ramp from standstill, so it is drawn only for
@@ -18,7 +20,7 @@ the fixed-frequency starts (``dol``, ``six_step``).
 
 from __future__ import annotations
 
-FORM_SETS = ("development", "heldout", "all")
+FORM_SETS = ("development", "heldout", "all", "variants")
 
 #: Forms the diagnosis was developed on (the draw order of :meth:`Effect.draw` is this order).
 DEVELOPMENT = {
@@ -66,6 +68,19 @@ RETIRED = {
     "load_torque": ("dc_generator", "eddy_brake"),
 }
 
+#: Forms the catalogue's first form of an effect cannot fit (:attr:`benchmark.core.effects.Effect.FIRST_FORM`):
+#: development forms and retired held-out forms that made it extend its form. Diagnosed with the
+#: injected effect reduced to its first form, they are form variants for the calibration of the
+#: rule (``python -m benchmark.studies.calibration sources=plant_variants``): a form the catalogue
+#: does not have, as a real machine's may be, none of them a held-out form kept for the scoring.
+VARIANTS = {
+    "speed_sensor_gain": ("gain_ripple", "tacho_filter"),
+    "two_mass": ("backlash", "elastomer"),
+    "double_cage": ("deep_bar",),
+    "temperature_drift": ("two_body",),
+    "load_torque": ("dc_generator", "eddy_brake"),
+}
+
 #: The motulator source (``synthetic/motulator_source.py``) injects three effects; development
 #: forms are motulator's own models, held-out forms are in ``synthetic/motulator_effects.py``.
 #: It has no form (and injects nothing) for the other effects.
@@ -95,8 +110,8 @@ SCENARIOS = {"current_transformer": ("dol", "six_step")}
 def motulator_forms_of(name: str, which: str = "development") -> tuple[str, ...]:
     """The motulator source's forms of effect ``name`` in form set ``which``."""
     dev, held = MOTULATOR_DEVELOPMENT[name], MOTULATOR_HELDOUT[name]
-    return {"development": dev, "heldout": held,
-            "all": dev + MOTULATOR_RETIRED.get(name, ()) + held}[check_form_set(which)]
+    return {"development": dev, "heldout": held, "all": dev + MOTULATOR_RETIRED.get(name, ()) + held,
+            "variants": MOTULATOR_RETIRED.get(name, dev)}[check_form_set(which)]
 
 
 def check_form_set(which: str) -> str:
@@ -114,8 +129,8 @@ def all_forms(name: str) -> tuple[str, ...]:
 def forms_of(name: str, which: str = "development", scenario: str | None = None) -> tuple[str, ...]:
     """The forms of effect ``name`` in form set ``which`` that may occur in a ``scenario``
     kind (None: any)."""
-    pool = {"development": DEVELOPMENT[name], "heldout": HELDOUT[name],
-            "all": all_forms(name)}[check_form_set(which)]
+    pool = {"development": DEVELOPMENT[name], "heldout": HELDOUT[name], "all": all_forms(name),
+            "variants": VARIANTS.get(name, DEVELOPMENT[name])}[check_form_set(which)]
     return tuple(f for f in pool if scenario is None or scenario in SCENARIOS.get(f, (scenario,)))
 
 

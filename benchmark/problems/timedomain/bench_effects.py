@@ -165,6 +165,10 @@ class SpeedSensorGain(Effect):
     size_name = "gain_error"
     realistic = (0.01, 0.05)
     extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos", "tach_lag")
+    #: Gain and offset only: the ripple once per revolution came with d666695 (two_mass and
+    #: sensor_offset had chased a plant tachometer's ripple), the output filter with 94d0a4a
+    #: (held-out ``tacho_filter``, plant seed 402 set 29, 14.6 times the noise left).
+    FIRST_FORM = {"tach_ripple_sin": 0.0, "tach_ripple_cos": 0.0, "tach_lag": 0.0}
     extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed", "s")
     physics = "tachometer gain error, offset, ripple at the rotation frequency and output filter"
     #: The longest output filter a speed sensor has (s): a tachogenerator's RC filter or an
@@ -270,6 +274,10 @@ class TwoMass(Effect):
     size_unit = "Hz"
     realistic = (30.0, 200.0)
     extra_names = ("tm_freq", "tm_ratio", "tm_zeta", "tm_backlash", "tm_hardening")
+    #: A linear spring and damper: the free play came with 0865c78 (7 of 10 plant couplings had
+    #: one), the hardening with 8ca8136 (held-out ``elastomer``: beside its linear spring a load
+    #: or a leakage saturation took what the coupling left, motulator seed 407).
+    FIRST_FORM = {"tm_backlash": 0.0, "tm_hardening": 1.0}
     extra_units = ("Hz", "p.u. of motor inertia", "-", "rad",
                    "stiffness at the torque scale over small-twist stiffness")
     physics = ("motor and load inertias coupled by a torsional spring and damper, with free play (backlash) and a "

@@ -77,6 +77,9 @@ class DoubleCage(Effect):
     size_name = "resistance_rise"
     realistic = (0.3, 1.5)
     extra_names = ("dc_rise", "dc_tau", "dc_share3", "dc_tau3")
+    #: Two rotor loops: the third came with 91ed134 (the plant's deep bars of 3-6 slices, where
+    #: two loops left 1.7-2.4 % up to the 13th harmonic).
+    FIRST_FORM = {"dc_share3": 0.0, "dc_tau3": 5e-4}
     extra_units = ("p.u. of low-slip R_R", "s", "fraction of loops 2+3 conductance", "s")
     FORM_DRAWS = {"ladder": {"choice": [False, True]}, "tau2": [0.002, 0.008]}
     physics = "second rotor cage / deep bars: rotor resistance and leakage depend on rotor frequency"

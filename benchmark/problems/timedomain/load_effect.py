@@ -47,6 +47,11 @@ class LoadTorque(Effect):
     realistic = (0.05, 0.6)
     extra_names = ("load_const", "load_quad", "load_step", "load_step_time", "load_step_speed", "load_step_tau",
                    "load_step_off", "load_step_crit")
+    #: Constant, quadratic and a step at one instant: the switched load's speed share, rise and
+    #: switch-off came with 71e712b (a DC machine's armature circuit; held-out ``dc_generator``),
+    #: the eddy-current brake's law later (held-out ``eddy_brake``). Held at none: the rise
+    #: clipped to its box's one sample, the switch-off to its box's start (never after the step).
+    FIRST_FORM = {"load_step_speed": 0.0, "load_step_tau": 0.0, "load_step_off": 0.0, "load_step_crit": 0.0}
     extra_units = ("p.u. of torque scale", "p.u. of torque scale at w_sync", "p.u. of torque scale",
                    "fraction of record", "fraction of switched load", "s", "fraction of record",
                    "w_sync over critical speed")

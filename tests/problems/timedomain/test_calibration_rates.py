@@ -42,9 +42,24 @@ def test_rates_count_false_selections_exact_verdicts_and_the_skew_per_share():
     assert low["false_selection_ci95"][1] > high["false_selection_ci95"][0]
 
 
-@pytest.mark.parametrize(("target", "chosen"), [(0.05, None), (0.25, 0.6), (0.5, 0.3)])
-def test_the_chosen_share_is_the_smallest_within_the_target(target, chosen):
+@pytest.mark.parametrize(("target", "chosen"), [(0.05, None), (0.25, None), (0.7, 0.6), (0.9, 0.3)])
+def test_the_chosen_share_is_the_smallest_within_the_target_with_its_interval(target, chosen):
+    # Wilson 95 % upper ends: 2 of 4 false at 0.3 (0.85), 1 of 4 at 0.6 (0.70)
     assert chosen_share(rates(sets(), shares=(0.3, 0.6), n_boot=50), target) == chosen
+
+
+def test_a_rate_at_the_target_by_its_count_alone_is_not_within_it():
+    """2 false selections in 40 sets is 5 % by the count and up to 17 % by its interval: a 5 %
+    target is not met there; none in 80 is (upper end 4.6 %), one in 80 is not (6.7 %)."""
+    def many(n, false):
+        return [{"injected": ["double_cage"], "verdicts": [
+            verdict(0.3, "explained", ["double_cage"] + (["iron_loss"] if k < false else [])),
+            verdict(0.5, "explained", ["double_cage"])]} for k in range(n)]
+
+    assert chosen_share(rates(many(40, 2), shares=(0.3, 0.5), n_boot=50), 0.05) is None  # 0/40 at 0.5: up to 8.8 %
+    assert chosen_share(rates(many(80, 2), shares=(0.3, 0.5), n_boot=50), 0.05) == 0.5
+    assert chosen_share(rates(many(80, 0), shares=(0.3, 0.5), n_boot=50), 0.05) == 0.3
+    assert chosen_share(rates(many(80, 1), shares=(0.3, 0.5), n_boot=50), 0.05) == 0.5
 
 
 def test_the_blind_score_and_the_calibration_count_the_same_names():

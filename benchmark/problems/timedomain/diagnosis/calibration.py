@@ -19,6 +19,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from benchmark.core.effects import load_effects
+from benchmark.core.uncertainty import wilson
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.named import named_effects
 from benchmark.problems.timedomain.diagnosis.pipeline import diagnose
@@ -29,12 +30,19 @@ from benchmark.problems.timedomain.settings import TimeDomainSettings
 SHARES = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 
 
-def diagnose_at_shares(run: Mapping, dataset: StartupDataset, identify: Callable, shares=SHARES) -> list[dict]:
+def diagnose_at_shares(run: Mapping, dataset: StartupDataset, identify: Callable, shares=SHARES,
+                       first_form=()) -> list[dict]:
     """The verdict of ``dataset`` at each share (ascending), as ``{share, status, effects,
-    held_by_base, removed_by_conditioning, gap_before, gap_after, explained_share}``."""
+    held_by_base, removed_by_conditioning, gap_before, gap_after, explained_share}``. The
+    candidates named in ``first_form`` are fitted in their first form
+    (:meth:`~benchmark.core.effects.Effect.reduce_to_first_form`): a form variant, the injected
+    effect in a form the catalogue cannot fit."""
     settings = diagnosis_settings(run)
     candidates = run.get("candidates")
     effects = load_effects("timedomain", list(candidates) if candidates else None)
+    for name in first_form:
+        if name in effects:
+            effects[name].reduce_to_first_form()
     base, ds, _ = identify_base(TimeDomainSettings.from_run(run), dataset, settings.base_case, identify,
                                 seed=int(run.get("seed", 0) or 0))
     out, selector = [], None
@@ -71,7 +79,9 @@ def _rates(sets: list[dict], share: float) -> tuple[np.ndarray, np.ndarray, np.n
 def rates(sets: list[dict], shares=SHARES, n_boot: int = 2000, seed: int = 0) -> list[dict]:
     """Per share: false-selection rate, exact rate and ``channel_delay`` false rate (over the sets
     where it was a candidate and not injected), each with a 95 % percentile bootstrap interval
-    over the sets (resampled ``n_boot`` times)."""
+    over the sets (resampled ``n_boot`` times) and a Wilson 95 % interval
+    (:func:`~benchmark.core.uncertainty.wilson`: a rate with no event has a bootstrap interval of
+    nothing, and the choice reads the Wilson one)."""
     rng = np.random.default_rng(seed)
     idx = rng.integers(0, len(sets), size=(n_boot, len(sets)))
     out = []
@@ -82,6 +92,7 @@ def rates(sets: list[dict], shares=SHARES, n_boot: int = 2000, seed: int = 0) ->
             boot = x[idx].mean(axis=1)
             row[name] = float(x.mean())
             row[name + "_ci95"] = [float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))]
+            row[name + "_wilson95"] = wilson(int(round(x.sum())), len(x))
         n_free = skew_free.sum()
         row["channel_delay_candidate_not_injected"] = int(n_free)
         row["channel_delay_named_not_injected"] = int(skew.sum())
@@ -90,6 +101,14 @@ def rates(sets: list[dict], shares=SHARES, n_boot: int = 2000, seed: int = 0) ->
 
 
 def chosen_share(table: list[dict], target: float) -> float | None:
-    """The smallest share whose false-selection rate is at most ``target``, or None."""
-    ok = [r["share"] for r in table if r["false_selection"] <= target]
+    """The smallest share whose false-selection rate is within ``target`` with its interval: the
+    upper end of its Wilson 95 % interval at most ``target`` (a rate at the target by its count
+    alone, 2 of 40 for 5 %, is not within it), or None."""
+    ok = [r["share"] for r in table if r["false_selection_wilson95"][1] <= target]
     return min(ok) if ok else None
+
+
+def fewest_false(table: list[dict]) -> float:
+    """Where no share is within the target (:func:`chosen_share` None): the smallest share with
+    the fewest false selections."""
+    return min(table, key=lambda r: (r["false_selection"], r["share"]))["share"]

@@ -219,7 +219,7 @@ class JointModel:
             if n == "fc":
                 lo[j], hi[j] = 0.0, 5.0 * c[j] + fc_scale
         for eff in self.effects:
-            elo, ehi = eff.extra_bounds(ctx)
+            elo, ehi = eff.fit_bounds(ctx)
             lo, hi = np.concatenate([lo, elo]), np.concatenate([hi, ehi])
         self.lower, self.upper = lo, hi
         sl = data.channel_slices()
