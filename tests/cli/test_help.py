@@ -14,7 +14,7 @@ from benchmark.core.config_files import config_groups
 ENTRY_POINTS = {  # module: keys its help must name
     "benchmark": ["seed=0", "budget=null", "data.path=null", "progress=auto", "problem.stator_resistance=auto",
                   "optimizer.plugin.{global_fraction=0.3"],
-    "benchmark.diagnose": ["candidates=null", "effects=[]", "diagnosis.{selection_share=0.3", "base_case=2",
+    "benchmark.diagnose": ["candidates=null", "effects=[]", "diagnosis.{selection_share=0.5", "base_case=2",
                            "budget=8000"],
     "synthetic": ["out=", "effects=[]", "effect_size=null"],
     "benchmark.blind": ["source=own", "n=30", "free_share=0.34", "workdir=outputs/blind"],

@@ -37,9 +37,10 @@ The same test decides everything:
 * backward: every effect of the chosen set must still earn its place beside the others
   (``M - e`` refitted from several starts), else the weakest is dropped and the check repeats.
 
-``tau`` is calibrated (``benchmark.studies.calibration``, 0.3): the smallest share whose rate of
-naming an effect that was not injected, over development data with every effect in its varied
-forms, stays within the target; see ``docs/diagnosis.md``.
+``tau`` is calibrated (``benchmark.studies.calibration``, 0.5): the smallest share whose rate of
+naming an effect that was not injected, over development data and form variants (the injected
+effect fitted in the catalogue's first form), stays within the target, else the smallest with
+the fewest; see ``docs/diagnosis.md``.
 """
 
 from __future__ import annotations
