@@ -3,9 +3,13 @@ selections, exact verdicts and channel_delay's false rate per share, and the cho
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
-from benchmark.problems.timedomain.diagnosis.calibration import chosen_share, rates
+from benchmark.problems.timedomain.diagnosis.calibration import chosen_share, fewest_false, rates
+from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings
 
 
 def verdict(share, status, effects=(), held=(), removed=()):
@@ -83,3 +87,24 @@ def test_the_blind_score_and_the_calibration_count_the_same_names():
     assert found["predicted"] == "sensor_offset"
     assert score_row(3, ["load_torque"], doc("unexplained", held=["load_torque"]))["predicted"] == "unexplained"
     assert score_row(4, ["two_mass"], doc("no_gap"))["invisible"]
+
+
+def test_where_no_share_is_within_the_target_the_smallest_with_the_fewest_false_selections_is_taken():
+    table = rates(sets(), shares=(0.3, 0.6), n_boot=50)
+    assert chosen_share(table, 0.05) is None  # 1/4 false at 0.6: far from 5 %
+    assert fewest_false(table) == 0.6
+    tie = [{"share": 0.5, "false_selection": 0.0}, {"share": 0.4, "false_selection": 0.0},
+           {"share": 0.3, "false_selection": 0.1}]
+    assert fewest_false(tie) == 0.4
+
+
+def test_the_default_share_is_the_calibrations_choice_on_its_recorded_sets():
+    # results/calibration_variants.jsonl: the per-set verdicts at every share of the calibration on
+    # form variants and development data (results/calibration_variants.md)
+    recorded = Path(__file__).resolve().parents[3] / "results" / "calibration_variants.jsonl"
+    table = rates([json.loads(line) for line in recorded.read_text().splitlines()], n_boot=50)
+    false = {r["share"]: round(r["false_selection"] * r["sets"]) for r in table}
+    assert table[0]["sets"] == 31
+    assert false == {0.3: 5, 0.4: 1, 0.5: 0, 0.6: 0, 0.7: 0, 0.8: 0}
+    assert chosen_share(table, 0.05) is None  # no event in 31: a Wilson upper end of 11 %
+    assert fewest_false(table) == DiagnosisSettings().selection_share == 0.5
