@@ -327,19 +327,53 @@ def test_the_least_needed_effect_goes_first_and_the_check_repeats():
     assert sorted(w.chi2 for w in withouts.values()) == [3950.0, 8500.0, 10400.0]
 
 
-def test_a_pruned_effect_leaves_the_candidates_and_the_selection_resumes():
+def test_a_pruned_effect_goes_before_a_round_is_fitted_beside_it_and_the_selection_resumes():
     """An effect A enters first (70 % of the base's excess), C beside it (69 % of what A leaves).
     The drop-one refit of C alone, started from the pair's point, finds C's better basin (10.5
     against the 45 of its first fit from the base): beside C, A removes 5 % of what is left and
-    goes. The selection resumes without A; B removes 1 % beside C: C alone is named."""
+    goes. The check runs as C enters, before a round is fitted beside the two (abc is fitted only
+    as the pair A+B beside C); the selection resumes from C with A still a candidate: neither A
+    (5 %) nor B (1 %) earns beside C, nor the two as a pair: C alone is named."""
     eff_a, eff_b, eff_c = _Effect("a"), _Effect("b"), _Effect("c")
     held = {frozenset(): 100.0, frozenset("a"): 30.0, frozenset("b"): 60.0, frozenset("c"): 45.0,
             frozenset("ac"): 10.0, frozenset("ab"): 29.0, frozenset("abc"): 9.8, frozenset("bc"): 10.4}
     sel = _Given(held, refits={frozenset("c"): 10.5})
     final, _, withouts, order, pruned, rounds = sel.select([eff_a, eff_b, eff_c], _fit(100.0), BAND)
     assert pruned == ["a"] and order == ["c"] and final.chi2 == 10.5
-    assert [r["chosen"] for r in rounds if not r.get("pairs")] == ["a", "c", None, None]
+    assert [r["chosen"] for r in rounds] == ["a", "c", None, None] and rounds[-1]["pairs"]
+    assert [r["from"] for r in rounds] == [[], ["a"], ["c"], ["c"]]
+    assert {c["effect"]: c["earns"] for c in rounds[2]["candidates"]} == {"a": False, "b": False}
     assert rounds[-1]["resumed_after_pruning"] == ["a"] and withouts["c"].chi2 == 100.0
+
+
+def test_an_effect_pruned_after_an_entry_enters_again_beside_the_effect_that_masks_it():
+    """A load step (``a``) enters first (60 % of the base's excess) and a coupling (``c``) beside
+    it; the coupling alone, refitted from the pair's point, leaves 16, and beside it the load
+    removes 7 %: dropped. It stays a candidate: from the coupling no single earns (the load 7 %,
+    the tachometer's gain ``b`` 13 %), but the load and the gain mask each other and enter as a
+    pair (each removes more than 85 % of what the other leaves). Had the drop taken the load out
+    of the candidates, the coupling alone would be named, at 16."""
+    load, gain, coupling = _Effect("a"), _Effect("b"), _Effect("c")
+    held = {frozenset(): 100.0, frozenset("a"): 40.0, frozenset("b"): 90.0, frozenset("c"): 95.0,
+            frozenset("ab"): 35.0, frozenset("ac"): 15.0, frozenset("bc"): 14.0, frozenset("abc"): 2.0}
+    sel = _Given(held, refits={frozenset("c"): 16.0})
+    final, _, _, order, pruned, rounds = sel.select([load, gain, coupling], _fit(100.0), BAND)
+    assert pruned == ["a"] and sorted(final.names) == ["a", "b", "c"] and final.chi2 == 2.0
+    assert [r["chosen"] for r in rounds] == ["a", "c", None, "b+a"] and order == ["c", "b", "a"]
+
+
+def test_an_effect_pruned_a_second_time_leaves_the_candidates():
+    """``a`` enters, ``b`` beside it, and the refit of ``b`` alone makes ``a`` redundant (16 -> 15);
+    ``c`` enters beside ``b`` and ``a`` again beside the two (7 -> 2, 83 %), until the refit of
+    ``b + c`` reaches 2.05 and ``a`` removes 5 % of it: dropped a second time, it is out of the
+    candidates, and the selection ends with ``b + c``."""
+    a, b, c = _Effect("a"), _Effect("b"), _Effect("c")
+    held = {frozenset(): 100.0, frozenset("a"): 40.0, frozenset("b"): 60.0, frozenset("c"): 90.0,
+            frozenset("ab"): 15.0, frozenset("ac"): 35.0, frozenset("bc"): 7.0, frozenset("abc"): 2.0}
+    sel = _Given(held, refits={frozenset("b"): 16.0, frozenset("bc"): 2.05})
+    final, _, _, order, pruned, rounds = sel.select([a, b, c], _fit(100.0), BAND)
+    assert pruned == ["a", "a"] and final.names == ["b", "c"] and final.chi2 == 2.05 and order == ["b", "c"]
+    assert [r["chosen"] for r in rounds] == ["a", "b", "c", "a"]
 
 
 def test_an_effect_negligible_on_all_data_is_dropped_on_entry_and_no_round_is_fitted_beside_it():

@@ -28,7 +28,8 @@ enters). Where none of them earns, every candidate is fitted fully; when none ea
 pair enters when each of its two effects earns its place beside the other. Pairs are screened
 first by linearised score tests (:mod:`.score_tests`: one effect added to the other's single fit
 on fold A, a Gauss-Newton step scored on fold B); as for the singles, the best screened and every
-one the screening says both may earn are fitted fully, best screened first. Backward, every
+one the screening says both may earn are fitted fully, best screened first. Backward (after
+every entry that leaves two effects or more, and when none enters), every
 chosen effect must earn its place beside the others (each drop-one model refitted from several
 starts), and its size on all data must reach a
 tenth of its smallest realistic size, and where the record measures the effect itself (an
@@ -249,12 +250,17 @@ class Selector(Screening, Instants):
                 out.append(name)
         return out
 
-    def forward(self, candidates, cur: SetFit, band: float, order: list[str], rounds: list, progress=None) -> SetFit:
+    def forward(self, candidates, cur: SetFit, band: float, order: list[str], rounds: list, progress=None,
+                check_from: int | None = None) -> SetFit:
         """Greedy forward selection from ``cur`` (module docstring); appends the names chosen to
-        ``order`` and each round's table to ``rounds``."""
+        ``order`` and each round's table to ``rounds``. ``check_from``: return as soon as an
+        entry leaves at least that many effects (:meth:`select` checks them before going on)."""
         cap = self.settings.max_effects
+        start = len(cur.names)
         while True:
             chosen = cur.effects
+            if check_from is not None and len(chosen) > start and len(chosen) >= check_from:
+                return cur
             pool = [e for e in candidates if e.name not in cur.names and e.name not in self.refused_names]
             if not pool or cur.chi2 <= band**2 or (cap is not None and len(chosen) >= cap):
                 return cur
@@ -424,16 +430,20 @@ class Selector(Screening, Instants):
         return cur, {}, pruned
 
     def select(self, candidates, base_fit: SetFit, band: float, progress=None):
-        """Forward selection, the backward check, and forward again without what was dropped,
-        until the backward check drops nothing. Returns (final fit, its fit on all data or None,
-        the drop-one fits by name, the chosen names in order of selection, names pruned, rounds)."""
+        """Forward selection with the backward check after every entry that leaves two effects
+        or more (an effect a later one makes redundant goes before rounds are fitted beside the
+        two; it stays a candidate, to enter again beside an effect that masks it, until it is
+        dropped a second time) and when no candidate enters (what it drops then leaves the
+        candidates), until a forward round adds nothing and the check drops nothing. Returns (final fit, its fit on all data or None, the drop-one
+        fits by name, the chosen names in order of selection, names pruned, rounds)."""
         rounds, order, pruned = [], [], []
         cur, pool = base_fit, list(candidates)
         self.refused_names = set()
         full_x, withouts, checked = None, {}, None
         while True:
-            done = len(rounds)
-            cur = self.forward(pool, cur, band, order, rounds, progress)
+            done, before = len(rounds), frozenset(cur.names)
+            cur = self.forward(pool, cur, band, order, rounds, progress, check_from=2)
+            grew = frozenset(cur.names) != before  # returned after an entry: the selection goes on
             if pruned:
                 for r in rounds[done:]:
                     r["resumed_after_pruning"] = list(pruned)
@@ -445,12 +455,17 @@ class Selector(Screening, Instants):
             cur, withouts, dropped = self.backward(cur, self.memo.get(frozenset(), base_fit), band, progress, full_x)
             pruned += dropped
             checked = frozenset(cur.names)
-            if not dropped:
+            if not dropped and not grew:
                 break
-            pool = [e for e in pool if e.name not in dropped]
+            if not dropped:
+                continue
+            # dropped where the forward selection ended, or a second time: out of the candidates;
+            # dropped right after an entry: still a candidate (its masking partner may yet enter)
+            gone = {n for n in dropped if not grew or pruned.count(n) > 1}
+            pool = [e for e in pool if e.name not in gone]
             if cur.names:
                 cur, full_x = self.with_full_fit(cur)
-        order = [n for n in order if n in cur.names]
+        order = list(reversed(dict.fromkeys(n for n in reversed(order) if n in cur.names)))  # its last entry
         return cur, full_x, withouts, order, pruned, rounds
 
 
