@@ -481,3 +481,17 @@ def test_the_report_says_which_names_are_not_firm_and_their_shares_over_the_band
     assert len(lines) == 2 and lines[0].startswith("**Not firm: sensor_offset.**")
     assert "removes 21 % to 177 % of the excess" in lines[0] and "against the rule's 30 %" in lines[0]
     assert "removes 10 % or more" in lines[1]
+
+
+def test_the_report_names_each_dropped_effect_once_and_says_which_came_back():
+    """``pruned`` keeps every drop in order; the report lists an effect once, and one that entered
+    again (the masking test above: the load, dropped beside the coupling, back as a pair with the
+    gain) apart from those that stayed out."""
+    from benchmark.problems.timedomain.diagnosis.run import pruned_lines
+
+    doc = {"effects": ["two_mass", "load_torque", "speed_sensor_gain"],
+           "pruned": ["load_torque", "iron_loss", "iron_loss"]}
+    assert pruned_lines(doc) == [
+        "Chosen, then dropped (no longer earning its place beside the others): iron_loss.",
+        "Dropped once (another effect made it redundant), then chosen again beside the others: load_torque."]
+    assert pruned_lines({"effects": ["a"], "pruned": []}) == []

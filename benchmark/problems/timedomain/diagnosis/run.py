@@ -216,9 +216,7 @@ def render_markdown(doc: dict) -> str:
         lines.append("")
     for group in doc["indistinguishable"]:
         lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")
-    if doc.get("pruned"):
-        lines.append("Chosen, then dropped (no longer earning its place beside the others): "
-                     + ", ".join(doc["pruned"]) + ".")
+    lines += pruned_lines(doc)
     for ex in doc["excluded"]:
         lines.append(f"Not a candidate: {ex['effect']}: {ex['reason']}.")
     for h in doc.get("held_by_base", []):
@@ -278,6 +276,21 @@ def render_markdown(doc: dict) -> str:
                           for k, v in doc["noise"].items()),
               "", f"Wall time: {doc['wall_time_s']:.1f} s (CPU {doc.get('cpu_time_s', float('nan')):.1f} s).", ""]
     return "\n".join(lines)
+
+
+def pruned_lines(doc: dict) -> list[str]:
+    """What the backward check dropped (``pruned``, in order; an effect dropped right after an
+    entry may enter again beside another and is then in the final set)."""
+    final = set(doc.get("effects", []))
+    gone = list(dict.fromkeys(n for n in doc.get("pruned", []) if n not in final))
+    back = list(dict.fromkeys(n for n in doc.get("pruned", []) if n in final))
+    out = []
+    if gone:
+        out.append("Chosen, then dropped (no longer earning its place beside the others): " + ", ".join(gone) + ".")
+    if back:
+        out.append("Dropped once (another effect made it redundant), then chosen again beside the others: "
+                   + ", ".join(back) + ".")
+    return out
 
 
 def not_firm_lines(doc: dict) -> list[str]:
