@@ -362,6 +362,21 @@ def test_an_effect_pruned_after_an_entry_enters_again_beside_the_effect_that_mas
     assert [r["chosen"] for r in rounds] == ["a", "c", None, "b+a"] and order == ["c", "b", "a"]
 
 
+def test_the_last_round_and_the_pair_step_are_fitted_once():
+    """One effect enters (70 % of the base's excess) and then nothing earns, alone or as a pair:
+    the round where none enters and the pair step run once, and the check after them ends the
+    selection (it found the set unchanged; they are not run again from the checked set)."""
+    a, b, c = _Effect("a"), _Effect("b"), _Effect("c")
+    held = {frozenset(): 100.0, frozenset("a"): 30.0, frozenset("b"): 90.0, frozenset("c"): 95.0,
+            frozenset("ab"): 29.0, frozenset("ac"): 29.5, frozenset("abc"): 28.9}
+    sel = _Given(held)
+    final, _, _, order, pruned, rounds = sel.select([a, b, c], _fit(100.0), BAND)
+    assert order == ["a"] and pruned == [] and final.chi2 == 30.0
+    assert [(r["from"], r["chosen"], bool(r.get("pairs"))) for r in rounds] == [
+        ([], "a", False), (["a"], None, False), (["a"], None, True)]
+    assert sel.fitted.count(["a", "b", "c"]) == 1
+
+
 def test_an_effect_pruned_a_second_time_leaves_the_candidates():
     """``a`` enters, ``b`` beside it, and the refit of ``b`` alone makes ``a`` redundant (16 -> 15);
     ``c`` enters beside ``b`` and ``a`` again beside the two (7 -> 2, 83 %), until the refit of

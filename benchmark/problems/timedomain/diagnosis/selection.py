@@ -434,16 +434,18 @@ class Selector(Screening, Instants):
         or more (an effect a later one makes redundant goes before rounds are fitted beside the
         two; it stays a candidate, to enter again beside an effect that masks it, until it is
         dropped a second time) and when no candidate enters (what it drops then leaves the
-        candidates), until a forward round adds nothing and the check drops nothing. Returns (final fit, its fit on all data or None, the drop-one
-        fits by name, the chosen names in order of selection, names pruned, rounds)."""
+        candidates), until a forward round adds nothing and the check drops nothing. Returns
+        (final fit, its fit on all data or None, the drop-one fits by name, the chosen names in
+        order of selection, names pruned, rounds)."""
         rounds, order, pruned = [], [], []
         cur, pool = base_fit, list(candidates)
         self.refused_names = set()
         full_x, withouts, checked = None, {}, None
         while True:
-            done, before = len(rounds), frozenset(cur.names)
+            done = len(rounds)
             cur = self.forward(pool, cur, band, order, rounds, progress, check_from=2)
-            grew = frozenset(cur.names) != before  # returned after an entry: the selection goes on
+            # returned right after an entry (a check is due), not after a round where none entered
+            grew = len(rounds) > done and rounds[-1]["chosen"] is not None
             if pruned:
                 for r in rounds[done:]:
                     r["resumed_after_pruning"] = list(pruned)
