@@ -219,6 +219,40 @@ def test_score_tests_rank_the_injected_effect_first_and_predict_the_fits(offset_
     assert abs(offset["heldout_chi2"] - offset["predicted_heldout_chi2"]) < 0.1 * held, offset
 
 
+def test_a_score_test_names_the_parameters_that_change_nothing_at_its_start(offset_record):
+    """A load torque linearised at its first start, no torque at all, is seen in that shape
+    only: its step's instant, speed, time constant and law change nothing there (their Jacobian
+    columns are zero), so its score rates one shape, not the load (motulator, held-out seed 455
+    set 8: a load screened 0.02 below the base and fitted to a fifth of it). From a start with a
+    step torque they act, but for the brake's law; an offset's four parameters act from its start
+    of zeros."""
+    data, ctx, fcs = offset_record
+    a, b = data.folds()
+    base = JointModel(data, 2, [], ctx, TRUE, fcs)
+    x_a = np.array([TRUE[n] for n in base.base_names])
+    load, offset = EFFECTS["load_torque"], EFFECTS["sensor_offset"]
+
+    def make(effs):
+        return JointModel(data, 2, effs, ctx, TRUE, fcs)
+
+    def unseen(row):
+        return {n.split(".")[1] for n in row["unseen"]}
+
+    rows = {r["effect"]: r for r in score_tests(make, [], x_a, a, b, [(load,), (offset,)], ctx)}
+    assert load.extra_starts(ctx)[0][2] == 0.0  # no step torque at the first start
+    assert {"load_step_time", "load_step_speed", "load_step_tau"} <= unseen(rows["load_torque"])
+    assert "load_step" not in unseen(rows["load_torque"]) and rows["sensor_offset"]["unseen"] == []
+
+    def with_torque(model, x_fit, new):
+        start = np.array(new[0].extra_starts(ctx)[0], float)
+        start[2] = 0.5  # a step torque, N m
+        start[3] = 0.05  # its instant, s
+        return [np.concatenate([x_fit, start])]
+
+    stepped = score_tests(make, [], x_a, a, b, [(load,)], ctx, starts=with_torque)[0]
+    assert unseen(stepped) == {"load_step_crit"}  # an eddy-current brake's law: nothing without a brake
+
+
 def test_a_fit_holds_a_parameter_whose_bounds_coincide(offset_record):
     """The folds' shared instant (``Selector.held_at``) is held by bounds that coincide: the
     fit must leave it there (a zero-width box once let it move by up to 1 in its units)."""

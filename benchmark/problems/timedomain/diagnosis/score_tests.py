@@ -91,6 +91,10 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
     instant; the step where it overshoots a curved valley, a probe's level and sharpness);
     ``drop`` (the reference's ``score`` less the addition's);
     ``heldout_chi2_at_start`` and ``step`` (the new effects' part, normalised coordinates);
+    ``unseen``, the new effects' parameters that change nothing at the linearisation point (a
+    load step's instant and shape where its torque starts at 0: a step sees the effect in one
+    shape only, the start's, so a score no better than the current model's says nothing of the
+    effect's other shapes);
     ``point``, the parameters at which ``heldout_chi2`` was evaluated, by name.
 
     ``starts(model, x_fit, new)``: the linearisation points of an addition (each is tried, the
@@ -116,9 +120,11 @@ def score_tests(make_model: Callable[[list[Effect]], JointModel], chosen: Sequen
         step = _step(J, r0, u0, held, fit_mask)
         pred = r0[held_mask] + J[held_mask] @ step
         n_new = sum(len(e.extra_names) for e in add)
+        new_cols = range(len(step) - n_new, len(step))
         rows_out.append({"effect": "+".join(e.name for e in add), "predicted_heldout_chi2": float(np.mean(pred**2)),
                          "heldout_chi2_at_start": float(np.mean(r0[held_mask] ** 2)),
-                         "step": step[len(step) - n_new:].tolist(), "_start": r0})
+                         "step": step[len(step) - n_new:].tolist(), "_start": r0,
+                         "unseen": [model.names[j] for j in new_cols if not np.any(J[fit_mask, j])]})
         Xs = _to_x(model, u0[None, :] + np.array(STEP_FRACTIONS)[:, None] * step[None, :])
         stepped.append((model, Xs, model.rows(Xs)))
     after = plans[0][2].data.kernel.simulate(np.vstack([s[2] for s in stepped]))

@@ -53,19 +53,28 @@ class Screening:
             rows = score_tests(self.in_given_order, cur.effects, cur.xs[f], self.masks[f], self.masks[other],
                                [(e,) for e in todo], self.ctx, starts=starts)
             n = int(np.count_nonzero(self.masks[other]))
-            return {r["effect"]: (n * r["score"], r["point"]) for r in rows}
+            return {r["effect"]: (n * r["score"], r["point"], bool(r["unseen"])) for r in rows}
 
         if todo:
             parts = side_by_side(fold, FOLDS)
             total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
             kept |= {e.name: ((parts[0][e.name][0] + parts[1][e.name][0]) / total,
-                              {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)}) for e in todo}
+                              {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)},
+                              any(part[e.name][2] for part in parts)) for e in todo}
         return {e.name: kept[e.name][0] for e in pool}
+
+    def seen_in_one_shape(self, cur: SetFit, name: str) -> bool:
+        """Whether candidate ``name``'s screening beside ``cur`` (:meth:`screen_singles`) saw it in
+        its start's shape only: some of its parameters changed nothing where the step was taken
+        (``unseen`` of :func:`.score_tests.score_tests`, on either fold; a load torque starting at
+        0, whose instant and shape then do nothing). Its screened chi^2 then rates that shape, not
+        the effect."""
+        return self.screened_beside.get(_fit_key(cur), {}).get(name, (None, {}, False))[2]
 
     def screened_points(self, cur: SetFit, name: str) -> dict[str, list[dict[str, float]]]:
         """Per fold, the point at which candidate ``name``'s screening beside ``cur`` scored it
         (:meth:`screen_singles`; parameter names to values), as further starts of its fit."""
-        _, at = self.screened_beside.get(_fit_key(cur), {}).get(name, (None, {}))
+        _, at, _ = self.screened_beside.get(_fit_key(cur), {}).get(name, (None, {}, False))
         return {f: [point] for f, point in at.items()}
 
     def fold_b(self, sf: SetFit) -> float:
