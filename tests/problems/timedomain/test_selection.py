@@ -308,8 +308,8 @@ def test_a_candidate_the_screening_saw_in_one_shape_only_is_fitted_fully():
     order, rounds = [], []
     seen.forward([GAIN, LOAD, DROP], _fit(144.47), BAND, order, rounds)
     assert order == ["load_torque"] and sorted(seen.fitted) == [["load_torque"], ["speed_sensor_gain"]]
-    assert [(r["effect"], r["fitted"]) for r in rounds[0]["screening"]] == [
-        ("speed_sensor_gain", True), ("inverter_drop", False), ("load_torque", True)]
+    assert [(r["effect"], r["fitted"], r["seen_in_one_shape"]) for r in rounds[0]["screening"]] == [
+        ("speed_sensor_gain", True, False), ("inverter_drop", False, False), ("load_torque", True, True)]
 
 
 def test_no_selection_at_the_noise_level_or_beyond_the_cap():

@@ -271,7 +271,8 @@ class Selector(Screening, Instants):
             best = rows[0]
             rnd = {"round": sum(1 for r in rounds if "candidates" in r) + 1, "from": [e.name for e in chosen],
                    "heldout_chi2_from": cur.chi2, "candidates": rows, "chosen": None, "indistinguishable": [],
-                   "screening": [{"effect": n, "screened_heldout_chi2": v, "fitted": n in trials}
+                   "screening": [{"effect": n, "screened_heldout_chi2": v, "fitted": n in trials,
+                                  "seen_in_one_shape": self.seen_in_one_shape(cur, n)}
                                  for n, v in sorted(screened.items(), key=lambda kv: kv[1])]}
             if refitted:
                 rnd["refitted_from_screening"] = refitted
