@@ -6,12 +6,25 @@ above the current set where its screening earns is fitted again from the screeni
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.fit import JointModel
 from benchmark.problems.timedomain.diagnosis.score_tests import score_tests
 from benchmark.problems.timedomain.diagnosis.set_fit import FOLDS, SetFit
+
+
+class Screened(NamedTuple):
+    """One candidate's screening beside a fit (:meth:`Screening.screen_singles`)."""
+
+    chi2: float  #: held-out chi^2 per residual it is predicted to reach, the folds pooled
+    points: dict  #: per fold, the point the test scored (parameter names to values)
+    one_shape: bool  #: some of its parameters changed nothing at the step's start (either fold)
+
+
+NOT_SCREENED = Screened(float("nan"), {}, False)
 
 
 def _fit_key(cur: SetFit) -> tuple:
@@ -58,10 +71,14 @@ class Screening:
         if todo:
             parts = side_by_side(fold, FOLDS)
             total = sum(int(np.count_nonzero(self.masks[f])) for f in FOLDS)
-            kept |= {e.name: ((parts[0][e.name][0] + parts[1][e.name][0]) / total,
-                              {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)},
-                              any(part[e.name][2] for part in parts)) for e in todo}
-        return {e.name: kept[e.name][0] for e in pool}
+            kept |= {e.name: Screened((parts[0][e.name][0] + parts[1][e.name][0]) / total,
+                                      {f: part[e.name][1] for f, part in zip(FOLDS, parts, strict=True)},
+                                      any(part[e.name][2] for part in parts)) for e in todo}
+        return {e.name: kept[e.name].chi2 for e in pool}
+
+    def screened(self, cur: SetFit, name: str) -> Screened:
+        """Candidate ``name``'s screening beside ``cur`` (:data:`NOT_SCREENED` where there is none)."""
+        return self.screened_beside.get(_fit_key(cur), {}).get(name, NOT_SCREENED)
 
     def seen_in_one_shape(self, cur: SetFit, name: str) -> bool:
         """Whether candidate ``name``'s screening beside ``cur`` (:meth:`screen_singles`) saw it in
@@ -69,13 +86,12 @@ class Screening:
         (``unseen`` of :func:`.score_tests.score_tests`, on either fold; a load torque starting at
         0, whose instant and shape then do nothing). Its screened chi^2 then rates that shape, not
         the effect."""
-        return self.screened_beside.get(_fit_key(cur), {}).get(name, (None, {}, False))[2]
+        return self.screened(cur, name).one_shape
 
     def screened_points(self, cur: SetFit, name: str) -> dict[str, list[dict[str, float]]]:
         """Per fold, the point at which candidate ``name``'s screening beside ``cur`` scored it
         (:meth:`screen_singles`; parameter names to values), as further starts of its fit."""
-        _, at, _ = self.screened_beside.get(_fit_key(cur), {}).get(name, (None, {}, False))
-        return {f: [point] for f, point in at.items()}
+        return {f: [point] for f, point in self.screened(cur, name).points.items()}
 
     def fold_b(self, sf: SetFit) -> float:
         """Fold B's held-out chi^2 of ``sf`` (fold B predicted by the fit on fold A)."""

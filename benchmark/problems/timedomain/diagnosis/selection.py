@@ -72,8 +72,7 @@ class Selector(Screening, Instants):
         self.order = dict(order or {})  # effect name -> place in the catalogue (a model's parameter order)
         self.memo: dict[frozenset, SetFit] = {}
         self.grids: dict = {}  # (model's effects, fold mask) -> its start grids' best rows (:func:`.grid.on_grid`)
-        self.screened_beside: dict = {}  # fit screened beside -> {candidate: (its screening, {fold: point
-        # scored}, whether it saw one shape of it only)}
+        self.screened_beside: dict = {}  # fit screened beside -> {candidate: its :class:`.screening.Screened`}
         self.refitted: set = set()  # (set, its sources' sets) already refitted: a refit from them again is the same
         self.base_full: np.ndarray | None = None  # the base fitted on all data (set by the pipeline)
         self.input_noise = None  # what the measured voltage's noise adds to each channel (the pipeline's)
