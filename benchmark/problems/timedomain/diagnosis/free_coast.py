@@ -3,8 +3,11 @@
 After the supply is removed the shaft coasts, ``J dw/dt = -(A + B w + C w^2)``, with ``A``
 Coulomb friction plus the passive load torques (N m), ``B = fv`` (N m s/rad) and ``C`` a fan
 load's coefficient (N m s^2/rad^2). Its speed has a closed form: an exponential of time, or
-with a fan load a tangent (or hyperbolic tangent) of time; the shaft stays at rest once
-stopped (passive torques hold it).
+with a fan load ``w = (w0 - g (B w0 + 2 A)) / (1 + g (2 C w0 + B))``, ``g = tan(q t / (2 J)) / q``
+with ``q^2 = 4 A C - B^2`` (``tanh(p t / (2 J)) / p`` with ``p^2 = -q^2`` where it is negative,
+``t / (2 J)`` where it is 0): the Riccati equation's solution in real numbers, written without
+the difference of near-equal terms that ``(-B + q tan(...)) / (2 C)`` takes where ``C`` is small;
+the shaft stays at rest once stopped (passive torques hold it).
 
 A DC generator still on its resistor brakes the coast through its armature circuit: its torque
 ``g`` follows ``B_a w`` with the armature's time constant ``tau_a`` (``tau_a g' = B_a w - g``,
@@ -69,11 +72,10 @@ class FreeCoast:
             m = self.armature
             self.lagged = _LaggedCoast(self.t, J[m], fv[m] - B_a[m], B_a[m], tau_a[m], A[m])
         if np.any(self.fan):
-            self.fan_terms = (A[self.fan], C[self.fan], J[self.fan], fv[self.fan])
-            with np.errstate(all="ignore"):
-                Af, Cf, Jf, fvf = self.fan_terms
-                self.q = np.sqrt((4 * Af * Cf - fvf**2).astype(complex))
-                self.turn = self.q * self.t / (2 * Jf)  # the tangent's phase q t / (2 J), the same from every start
+            m = self.fan
+            self.fan_terms = tuple(np.ascontiguousarray(v[m, 0], dtype=float) for v in (A, C, fv))
+            # g(t), the same from every start (the costly part: a tangent per sample)
+            self.fan_g = _fan_g(self.t[0], *(np.ascontiguousarray(v[m, 0], dtype=float) for v in (A, C, J, fv)))
 
     def speed(self, w0: np.ndarray) -> np.ndarray:
         """Speed (n, N) rad/s from the speed ``w0`` (n, 1) at the coast's start, 0 from where it
@@ -83,10 +85,8 @@ class FreeCoast:
         with np.errstate(all="ignore"):
             w = _decayed(np.ascontiguousarray(w0[:, 0]), (self.tau * self.c)[:, 0], self.decay)
             if np.any(self.fan):
-                _, Cf, _, fvf = self.fan_terms
-                w0f, q = w0[self.fan], self.q
-                phi0 = np.arctan((2 * Cf * w0f + fvf) / q)
-                w[self.fan] = np.real((-fvf + q * np.tan(phi0 - self.turn)) / (2 * Cf))
+                w[self.fan] = _fan_coast(np.ascontiguousarray(w0[self.fan, 0], dtype=float), *self.fan_terms,
+                                         self.fan_g)
             if np.any(self.armature):
                 w[self.armature] = self.lagged.speed(w0[self.armature])
             if np.any(self.brake):
@@ -139,6 +139,41 @@ def _zero_from_first_stop(w):
                 stopped = True
             if stopped:
                 w[r, k] = 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _fan_g(t, A, C, J, B):
+    """``g`` (n, N) of the fan load's coast (module docstring) for rows of (n,) columns ``A``,
+    ``C``, ``J``, ``B`` at times ``t`` (N,) s; inf from the tangent's pole on (the speed reaches
+    zero before it)."""
+    n, m = len(A), len(t)
+    g = np.zeros((n, m))
+    for r in range(n):
+        d = 4.0 * A[r] * C[r] - B[r] * B[r]
+        half = 0.5 / J[r]
+        q = math.sqrt(abs(d))
+        for k in range(m):
+            x = q * t[k] * half
+            if d > 0.0:
+                g[r, k] = math.tan(x) / q if x < 0.5 * math.pi else math.inf
+            elif d < 0.0:
+                g[r, k] = math.tanh(x) / q
+            else:
+                g[r, k] = t[k] * half
+    return g
+
+
+@numba.njit(cache=True, nogil=True)
+def _fan_coast(w0, A, C, B, g):
+    """Speed (n, N) of the fan load's coast from ``w0`` (n,) with ``g`` of :func:`_fan_g`."""
+    n, m = g.shape
+    w = np.empty((n, m))
+    for r in range(n):
+        a = B[r] * w0[r] + 2.0 * A[r]
+        b = 2.0 * C[r] * w0[r] + B[r]
+        for k in range(m):
+            w[r, k] = (w0[r] - g[r, k] * a) / (1.0 + g[r, k] * b)
+    return w
 
 
 @numba.njit(cache=True, nogil=True)
