@@ -36,13 +36,13 @@ def test_the_study_finds_this_checkout_equal_to_itself_and_a_changed_one_not(tmp
     _captured(tmp_path / "rows.pkl")
     same = compare(tmp_path / "rows.pkl", ROOT, rows=2, rounds=1)
     assert same["kernel_same"] and same["coast_same"] and same["rows"] == 2 and same["coast_rows"] == 3
-    # a "reference" whose coast halves the sub-step's lag: its outputs differ, and the study says so
+    # a "reference" whose coast takes twice as long steps on a lagged row: its outputs differ, and the study says so
     ref = tmp_path / "ref"
     src = ROOT / "benchmark" / "problems" / "timedomain"
     (ref / "benchmark" / "problems" / "timedomain" / "diagnosis").mkdir(parents=True)
     shutil.copy(src / "extended.py", ref / "benchmark" / "problems" / "timedomain" / "extended.py")
     coast_src = (src / "diagnosis" / "free_coast.py").read_text()
-    changed = coast_src.replace("a[l] = math.exp(-h / tau[rows[l]])", "a[l] = math.exp(-0.5 * h / tau[rows[l]])")
+    changed = coast_src.replace("STEPS_PER_LAG = 4", "STEPS_PER_LAG = 2")
     assert changed != coast_src
     (ref / "benchmark" / "problems" / "timedomain" / "diagnosis" / "free_coast.py").write_text(changed)
     other = compare(tmp_path / "rows.pkl", ref, rows=2, rounds=1)

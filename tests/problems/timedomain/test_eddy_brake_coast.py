@@ -5,7 +5,7 @@
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from benchmark.problems.timedomain.diagnosis.free_coast import LANES, FreeCoast, _brake_coast
+from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast, _brake_coast
 from benchmark.problems.timedomain.extended_rows import IDX
 from benchmark.problems.timedomain.load_effect import LoadTorque
 
@@ -35,8 +35,7 @@ def test_the_brakes_coast_follows_its_law_with_and_without_the_fields_lag():
     w = coast.speed(col(150.0))
     for k, tau in enumerate((0.0, 0.05)):
         ref = _reference(t, 150.0, tau)
-        moving = ref > 1.0
-        assert np.max(np.abs(w[k, moving] - ref[moving])) < 2e-4  # rad/s, of 150
+        assert np.max(np.abs(w[k] - ref)) < 1e-5  # rad/s, of 150, the stop's instant included
     # the brake's torque peaks at its critical speed (W_REF / R) below W_REF: below W_REF it brakes
     # more than the linear law of the same torque at W_REF, and the coast stops sooner
     linear = FreeCoast(t, col(J), col(FV + B_A), col(A), col(0.0), col(B_A), col(0.0)).speed(col(150.0))
@@ -58,10 +57,10 @@ def test_the_brakes_critical_speed_reaches_the_rows():
 
 
 def test_rows_integrated_side_by_side_equal_each_row_alone():
-    """``_brake_coast`` integrates rows with the same number of sub-steps side by side, in groups
-    of ``LANES``: each row's speed must be the one it has alone, bit for bit, whatever rows
-    share its group and in whatever order (here 19 rows: lags from none to a tenth of a sample,
-    so 1 to 20 sub-steps, three rows stopping within the record, more rows of one count than a group holds)."""
+    """``_brake_coast`` integrates each row on its own, with a step of its own: each row's speed
+    must be the one it has alone, bit for bit, whatever rows come with it and in whatever order
+    (here 19 rows: lags from none to a tenth of a sample, so steps from several samples to a
+    fortieth of one, three rows stopping within the record)."""
     t = np.arange(0.0, 4.0, 1e-3)
     rng = np.random.default_rng(3)
     n = 19
@@ -72,8 +71,7 @@ def test_rows_integrated_side_by_side_equal_each_row_alone():
     w0[:3] = 5.0  # these stop within the record
     together = _brake_coast(t, w0, *args)
     assert (together[:3, -1] == 0).all() and (together[3:, 1] > 0).all()
-    assert len({int(np.ceil(2e-3 / v)) if v > 0 else 1 for v in tau}) >= 3
+    assert len({int(np.ceil(4e-3 / v)) if v > 0 else 1 for v in tau}) >= 3
     for k in rng.permutation(n):
         alone = _brake_coast(t, w0[k:k + 1], *(a[k:k + 1] for a in args))
         np.testing.assert_array_equal(together[k], alone[0])
-    assert LANES < n
