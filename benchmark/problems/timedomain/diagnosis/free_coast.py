@@ -18,9 +18,11 @@ record ends in a steady state). With a fan load as well the lag is left out.
 
 An eddy-current brake still excited brakes with ``B_a w_ref h(u)``, ``h(u) = u (1 + r^2) / (1 +
 (r u)^2)`` of its speed ``u`` over ``w_ref`` (through the same lag, ``r`` = ``w_ref`` over its
-critical speed): the coast has no closed form, and :func:`_brake_coast` integrates it (classical Runge-Kutta
-steps of a twentieth of the mechanical time constant and a quarter of the lag's, the samples
-between two steps by cubic Hermite interpolation).
+critical speed): the coast has no closed form, and :func:`_brake_coast` integrates it (where its dynamics are slow
+beside the sampling, classical Runge-Kutta steps of a twentieth of the mechanical time constant
+and a quarter of the lag's, the samples between by cubic Hermite interpolation; else Heun's
+method on the record's own samples, sub-stepped to a tenth of the mechanical time constant and
+half the lag's, the lag itself exponential over each sub-step).
 
 The profiled start of the coast (:meth:`benchmark.problems.timedomain.diagnosis.fit.JointModel.recorded_stop`)
 evaluates the coast of the same rows from three starting speeds; :class:`FreeCoast` computes
@@ -189,13 +191,21 @@ def _decayed(w0, offset, decay):
     return w
 
 
-#: The brake coast's step, at most the fastest mechanical time constant over this (the law's slope is
-#: at most ``1 + r^2`` at ``u = 0``) ...
-STEPS_PER_TIME_CONSTANT = 20
-#: ... and the field's lag over this.
-STEPS_PER_LAG = 4
-#: Most steps within one sample interval (a stiff row: the step shrinks no further).
+#: Heun's step on the record's samples, at most the fastest mechanical time constant over this
+#: (the law's slope is at most ``1 + r^2`` at ``u = 0``), half the field's lag (integrated
+#: exponentially), and no more than :data:`MAX_SUBSTEPS` per sample (a stiff row).
+HEUN_STEPS_PER_TIME_CONSTANT = 10
 MAX_SUBSTEPS = 200
+#: A row whose Heun step is the sample interval takes classical Runge-Kutta steps instead, of the
+#: fastest mechanical time constant over this and a quarter of the lag, where they span two samples
+#: or more.
+STEPS_PER_TIME_CONSTANT = 20
+STEPS_PER_LAG = 4
+
+
+#: Rows of a brake coast taking Heun's steps integrated side by side (their chains of operations
+#: overlap in the core).
+LANES = 8
 
 
 @numba.njit(cache=True, nogil=True)
@@ -203,18 +213,42 @@ def _brake_coast(t, w0, J, fv, A, C, T_b, w_ref, r, tau):
     """Speed (n, N) of the coast ``J w' = -(A + fv w + C w^2 + T_b h(u))`` at times ``t`` (N,)
     from ``w0`` (n,), ``u`` the speed over ``w_ref`` through a first-order lag ``tau`` (0: none)
     starting at ``w0 / w_ref``, ``h`` the kernel's law (``extended_mechanics._brake_law``); 0 once
-    stopped (each argument but ``t`` an (n,) column of the rows). Each row is integrated on its own
-    (:func:`_brake_row`): classical Runge-Kutta steps of at most a twentieth of its fastest
-    mechanical time constant and a quarter of its lag, spanning several samples where they are
-    shorter (the samples between by cubic Hermite interpolation of the speed and its slope), or
-    several steps per sample where they are longer."""
+    stopped (each argument but ``t`` an (n,) column of the rows). A row whose dynamics are slow
+    beside the sampling takes classical Runge-Kutta steps spanning several samples
+    (:func:`_brake_rk4_row`); the others take ``sub`` Heun steps per sample, and rows with the same
+    ``sub`` are integrated side by side in groups of :data:`LANES` (:func:`_brake_lanes`), each by
+    its own operations, so a row's speed does not depend on the others."""
     n, m = len(w0), len(t)
     w = np.zeros((n, m))
     dt_max = 0.0
     for j in range(1, m):
         dt_max = max(dt_max, t[j] - t[j - 1])
+    subs = np.empty(n, np.int64)
     for k in range(n):
-        _brake_row(t, dt_max, w0[k], J[k], fv[k], A[k], C[k], T_b[k], w_ref[k], r[k], tau[k], w[k])
+        inv_J, inv_w = 1.0 / J[k], 1.0 / w_ref[k]
+        rate = (fv[k] + T_b[k] * (1.0 + r[k] * r[k]) * inv_w + 2.0 * C[k] * max(w0[k], 0.0)) * inv_J
+        # Heun's sub-steps: a tenth of the fastest mechanical time constant and half the lag
+        sub = max(1, int(math.ceil(HEUN_STEPS_PER_TIME_CONSTANT * dt_max * rate)))
+        if tau[k] > 0.0:
+            sub = max(sub, int(math.ceil(2.0 * dt_max / tau[k])))
+        subs[k] = min(sub, MAX_SUBSTEPS)
+        h_need = 1.0 / (STEPS_PER_TIME_CONSTANT * rate) if rate > 0.0 else math.inf
+        if tau[k] > 0.0:
+            h_need = min(h_need, tau[k] / STEPS_PER_LAG)
+        span = m if h_need == math.inf else int(min(h_need / dt_max, m))
+        if subs[k] == 1 and span >= 2:
+            _brake_rk4_row(t, span, w0[k], J[k], fv[k], A[k], C[k], T_b[k], w_ref[k], r[k], tau[k], w[k])
+            subs[k] = 0  # done
+    order = np.argsort(subs, kind="mergesort")
+    i = 0
+    while i < n and subs[order[i]] == 0:
+        i += 1
+    while i < n:
+        e = i + 1
+        while e < n and e - i < LANES and subs[order[e]] == subs[order[i]]:
+            e += 1
+        _brake_lanes(t, order[i:e], subs[order[i]], w0, J, fv, A, C, T_b, w_ref, r, tau, w)
+        i = e
     return w
 
 
@@ -228,50 +262,92 @@ def _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau):
 
 
 @numba.njit(cache=True, nogil=True)
-def _brake_row(t, dt_max, w0, J, fv, A, C, T_b, w_ref, r, tau, out):
-    """One row of :func:`_brake_coast` into ``out`` (N,), zero on entry; ``dt_max`` the longest
-    sample interval of ``t``, s."""
+def _brake_rk4_row(t, span, w0, J, fv, A, C, T_b, w_ref, r, tau, out):
+    """Classical Runge-Kutta steps of ``span`` samples, the samples between by cubic Hermite
+    interpolation; the rest stays 0 from the first speed that is not positive."""
     m = len(t)
     inv_w = 1.0 / w_ref
-    rate = (fv + T_b * (1.0 + r * r) * inv_w + 2.0 * C * max(w0, 0.0)) / J
-    h_need = 1.0 / (STEPS_PER_TIME_CONSTANT * rate) if rate > 0.0 else math.inf
-    if tau > 0.0:
-        h_need = min(h_need, tau / STEPS_PER_LAG)
-    sub, span = 1, 1
-    if dt_max > h_need:
-        sub = min(int(math.ceil(dt_max / h_need)), MAX_SUBSTEPS)
-    elif h_need < math.inf:
-        span = max(1, int(h_need / dt_max))
-    else:
-        span = m
     x, u = w0, w0 * inv_w
+    out[0] = x
     if not x > 0.0:
         return
-    out[0] = x
     dx, _ = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
     j = 0
     while j < m - 1:
         e = min(j + span, m - 1)
-        H = t[e] - t[j]
-        h = H / sub
+        h = t[e] - t[j]
         xs, dxs = x, dx
-        for _ in range(sub):
-            k1x, k1u = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
-            k2x, k2u = _brake_slopes(x + 0.5 * h * k1x, u + 0.5 * h * k1u, J, fv, A, C, T_b, inv_w, r, tau)
-            k3x, k3u = _brake_slopes(x + 0.5 * h * k2x, u + 0.5 * h * k2u, J, fv, A, C, T_b, inv_w, r, tau)
-            k4x, k4u = _brake_slopes(x + h * k3x, u + h * k3u, J, fv, A, C, T_b, inv_w, r, tau)
-            x += h / 6.0 * (k1x + 2.0 * (k2x + k3x) + k4x)
-            u += h / 6.0 * (k1u + 2.0 * (k2u + k3u) + k4u)
+        k1x, k1u = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
+        k2x, k2u = _brake_slopes(x + 0.5 * h * k1x, u + 0.5 * h * k1u, J, fv, A, C, T_b, inv_w, r, tau)
+        k3x, k3u = _brake_slopes(x + 0.5 * h * k2x, u + 0.5 * h * k2u, J, fv, A, C, T_b, inv_w, r, tau)
+        k4x, k4u = _brake_slopes(x + h * k3x, u + h * k3u, J, fv, A, C, T_b, inv_w, r, tau)
+        x += h / 6.0 * (k1x + 2.0 * (k2x + k3x) + k4x)
+        u += h / 6.0 * (k1u + 2.0 * (k2u + k3u) + k4u)
         dx, _ = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
         for i in range(j + 1, e + 1):
             if i == e:
                 v = x
             else:  # cubic Hermite between the step's ends
-                s = (t[i] - t[j]) / H
+                s = (t[i] - t[j]) / h
                 s2, s3 = s * s, s * s * s
-                v = ((2.0 * s3 - 3.0 * s2 + 1.0) * xs + (s3 - 2.0 * s2 + s) * H * dxs
-                     + (3.0 * s2 - 2.0 * s3) * x + (s3 - s2) * H * dx)
+                v = ((2.0 * s3 - 3.0 * s2 + 1.0) * xs + (s3 - 2.0 * s2 + s) * h * dxs
+                     + (3.0 * s2 - 2.0 * s3) * x + (s3 - s2) * h * dx)
             if not v > 0.0:
                 return  # stopped: the rest stays 0
             out[i] = v
         j = e
+
+
+@numba.njit(cache=True, nogil=True)
+def _brake_lanes(t, rows, sub, w0, J, fv, A, C, T_b, w_ref, r, tau, w):
+    """Rows ``rows`` of :func:`_brake_coast` (into ``w``), ``sub`` Heun steps per sample, side by side: each
+    row's chain of operations is its own (the lag's ``exp(-h/tau)`` computed again only when the
+    sub-step ``h`` changes)."""
+    L = len(rows)
+    x = np.empty(L)
+    ul = np.empty(L)
+    inv_J = np.empty(L)
+    inv_w = np.empty(L)
+    a = np.zeros(L)
+    lag = np.empty(L, np.bool_)
+    alive = np.ones(L, np.bool_)
+    for l in range(L):
+        k = rows[l]
+        x[l], ul[l] = w0[k], w0[k] / w_ref[k]
+        inv_J[l], inv_w[l] = 1.0 / J[k], 1.0 / w_ref[k]
+        lag[l] = tau[k] > 0.0
+        w[k, 0] = x[l]
+    h_was = -1.0
+    m = len(t)
+    for j in range(1, m):
+        h = (t[j] - t[j - 1]) / sub
+        if h != h_was:
+            for l in range(L):
+                if lag[l]:
+                    a[l] = math.exp(-h / tau[rows[l]])
+            h_was = h
+        left = 0
+        for l in range(L):
+            if alive[l] and not x[l] > 0.0:
+                alive[l] = False
+            left += alive[l]
+        if left == 0:
+            break
+        for _ in range(sub):
+            for l in range(L):
+                if not alive[l]:
+                    continue
+                k = rows[l]
+                xl = x[l]
+                u0 = ul[l] if lag[l] else xl * inv_w[l]
+                d0 = -(A[k] + fv[k] * xl + C[k] * xl * xl + T_b[k] * _brake_law(u0, r[k])) * inv_J[l]
+                xp = xl + h * d0
+                u1 = (ul[l] * a[l] + xp * inv_w[l] * (1.0 - a[l])) if lag[l] else xp * inv_w[l]
+                d1 = -(A[k] + fv[k] * xp + C[k] * xp * xp + T_b[k] * _brake_law(u1, r[k])) * inv_J[l]
+                x_new = xl + 0.5 * h * (d0 + d1)
+                if lag[l]:
+                    ul[l] = ul[l] * a[l] + 0.5 * (xl + x_new) * inv_w[l] * (1.0 - a[l])
+                x[l] = x_new
+        for l in range(L):
+            if alive[l]:
+                w[rows[l], j] = x[l]
