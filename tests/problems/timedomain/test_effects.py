@@ -184,15 +184,26 @@ def test_tachometer_ripple_once_per_revolution():
     assert eff.fitted_size(np.array([0.0, 0.0, 0.003, 0.004, 0.0]), ctx) > 0.1 * eff.realistic[0]
 
 
+def _refused_alone(eff, ctx, extras):
+    """What the selection's physical check (``Selector.refused``) says of ``eff`` fitted on all
+    data alone with ``extras`` (the base's seven parameters at 1)."""
+    from types import SimpleNamespace
+
+    from benchmark.problems.timedomain.diagnosis.selection import Selector
+
+    sel = Selector.__new__(Selector)
+    sel.ctx = ctx
+    model = SimpleNamespace(effects=[eff], slices=[slice(7, 7 + len(extras))], effect_names=[eff.name])
+    return sel.refused(SimpleNamespace(model=model, names=[eff.name]), np.concatenate([np.ones(7), extras]))
+
+
 def test_an_iron_loss_far_below_any_real_core_is_not_named():
     """The iron loss states its size, ``R_fe/(w_e L_M) = 1/g_fe_pu`` (real cores 20-100: 1-5 % of
     a small motor's rating; the larger, the smaller the loss), so the selection's physical check
     applies to it: fitted on all data at a tenth of the smallest real loss or less, it is not
     named. The fits of held-out plant seed 430: 0.0226-0.0654 p.u. where an iron loss was injected
     (sets 7, 14, 15), 0.00033 p.u. beside an eddy-current brake's load where none was (set 11)."""
-    from types import SimpleNamespace
-
-    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE, Selector
+    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE
 
     eff, ctx = EFFECTS["iron_loss"], _ctx()
     assert eff.fitted_size(np.array([0.02, 0.5]), ctx) == pytest.approx(50.0)
@@ -203,13 +214,9 @@ def test_an_iron_loss_far_below_any_real_core_is_not_named():
     tach = EFFECTS["speed_sensor_gain"]  # a size that grows with the effect: over the smallest, 1 %
     assert tach.realistic_share(np.array([0.0023, 0.0, 0.0, 0.0, 0.0]), ctx) == pytest.approx(0.23)
 
-    sel = Selector.__new__(Selector)
-    sel.ctx = ctx
-    model = SimpleNamespace(effects=[eff], slices=[slice(7, 9)], effect_names=["iron_loss"])
-    sf = SimpleNamespace(model=model, names=["iron_loss"])
     for g, refused in ((0.0003272868, True), (0.0226, False), (0.0654, False),
                        (0.9 * NEGLIGIBLE_SHARE * 0.01, True), (1.1 * NEGLIGIBLE_SHARE * 0.01, False)):
-        why = sel.refused(sf, np.concatenate([np.ones(7), [g, 0.0225]]))
+        why = _refused_alone(eff, ctx, np.array([g, 0.0225]))
         assert ("iron_loss" in why) is refused, (g, why)
         if refused:
             assert why["iron_loss"].startswith("fitted on all data its size is negligible")
@@ -221,22 +228,16 @@ def test_a_load_far_below_any_bench_load_is_not_named():
     data below a tenth of the smallest is not named. Held-out plant seed 456 set 7 (main
     saturation and an iron loss, no load) named a load of 0.0040 last; the loads named where one
     was injected (held-out draws 450-457) were fitted at 0.032-0.86."""
-    from types import SimpleNamespace
 
-    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE, Selector
+    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE
 
     eff, ctx = EFFECTS["load_torque"], _ctx()
     x = np.array([0.01, 0.02, 0.03, 0.5, 1.0, 0.02, 1.0, 0.0])  # switched part's instant, law...: not its size
     assert eff.fitted_size(x, ctx) == pytest.approx(0.06)
     assert eff.realistic_share(x, ctx) == pytest.approx(1.2)
-    sel = Selector.__new__(Selector)
-    sel.ctx = ctx
-    model = SimpleNamespace(effects=[eff], slices=[slice(7, 15)], effect_names=["load_torque"])
-    sf = SimpleNamespace(model=model, names=["load_torque"])
     for size, refused in ((0.0040, True), (0.0317, False), (0.857, False),
                           (0.9 * NEGLIGIBLE_SHARE * 0.05, True), (1.1 * NEGLIGIBLE_SHARE * 0.05, False)):
-        extras = np.array([0.0, 0.5 * size, 0.5 * size, 0.4, 0.0, 0.01, 1.0, 0.0])
-        why = sel.refused(sf, np.concatenate([np.ones(7), extras]))
+        why = _refused_alone(eff, ctx, np.array([0.0, 0.5 * size, 0.5 * size, 0.4, 0.0, 0.01, 1.0, 0.0]))
         assert ("load_torque" in why) is refused, (size, why)
 
 
