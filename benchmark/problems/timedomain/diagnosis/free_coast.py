@@ -27,7 +27,7 @@ half the lag's, the lag itself exponential over each sub-step).
 The profiled start of the coast (:meth:`benchmark.problems.timedomain.diagnosis.fit.JointModel.recorded_stop`)
 evaluates the coast of the same rows from three starting speeds; :class:`FreeCoast` computes
 what does not depend on the start (the decay ``exp(-t/tau)`` over the whole record, the
-costly part, and with a fan load the tangent's phase ``q t / (2 J)``) once per rows, and
+costly part, and with a fan load ``g``, a tangent of every sample) once per rows, and
 :meth:`FreeCoast.speed` gives the speed from each start with the same operations as
 evaluating the closed form afresh (the same numbers, bit for bit).
 """
