@@ -271,19 +271,18 @@ def _brake_rk4_row(t, span, w0, J, fv, A, C, T_b, w_ref, r, tau, out):
     out[0] = x
     if not x > 0.0:
         return
-    dx, _ = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
+    k1x, k1u = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)  # a step's first stage: the last one's end
     j = 0
     while j < m - 1:
         e = min(j + span, m - 1)
         h = t[e] - t[j]
-        xs, dxs = x, dx
-        k1x, k1u = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
+        xs, dxs = x, k1x
         k2x, k2u = _brake_slopes(x + 0.5 * h * k1x, u + 0.5 * h * k1u, J, fv, A, C, T_b, inv_w, r, tau)
         k3x, k3u = _brake_slopes(x + 0.5 * h * k2x, u + 0.5 * h * k2u, J, fv, A, C, T_b, inv_w, r, tau)
         k4x, k4u = _brake_slopes(x + h * k3x, u + h * k3u, J, fv, A, C, T_b, inv_w, r, tau)
         x += h / 6.0 * (k1x + 2.0 * (k2x + k3x) + k4x)
         u += h / 6.0 * (k1u + 2.0 * (k2u + k3u) + k4u)
-        dx, _ = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
+        k1x, k1u = _brake_slopes(x, u, J, fv, A, C, T_b, inv_w, r, tau)
         for i in range(j + 1, e + 1):
             if i == e:
                 v = x
@@ -291,7 +290,7 @@ def _brake_rk4_row(t, span, w0, J, fv, A, C, T_b, w_ref, r, tau, out):
                 s = (t[i] - t[j]) / h
                 s2, s3 = s * s, s * s * s
                 v = ((2.0 * s3 - 3.0 * s2 + 1.0) * xs + (s3 - 2.0 * s2 + s) * h * dxs
-                     + (3.0 * s2 - 2.0 * s3) * x + (s3 - s2) * h * dx)
+                     + (3.0 * s2 - 2.0 * s3) * x + (s3 - s2) * h * k1x)
             if not v > 0.0:
                 return  # stopped: the rest stays 0
             out[i] = v
