@@ -195,11 +195,11 @@ class LoadTorque(Effect):
     def fitted_size(self, extras, ctx):
         """The largest load torque the fit puts on the shaft, over the torque scale (the units of
         :attr:`realistic`): the constant, the quadratic at synchronous speed and the switched part
-        together (an upper bound: the switched part may be off, or follow speed). A load of a
-        twentieth of the smallest bench load is nothing a brake, a fan or a DC machine does: held-out
+        together (an upper bound: the switched part may be off, or follow speed). A load below a
+        tenth of the smallest bench load is nothing a brake, a fan or a DC machine does: held-out
         plant seed 456 set 7 (main saturation and an iron loss, no load) named a load of 0.004 of the
-        torque scale last, beside the two; the loads named where one was injected were fitted at
-        0.03-0.86."""
+        torque scale (a twelfth of the smallest) last, beside the two; the loads named where one was
+        injected were fitted at 0.03-0.86."""
         x = np.ravel(extras)
         return float(x[0] + x[1] + x[2])
 
