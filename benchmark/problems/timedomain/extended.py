@@ -31,6 +31,7 @@ from benchmark.problems.timedomain.extended_mechanics import (  # noqa: F401  (_
     _loads,
     _resist,
 )
+from benchmark.problems.timedomain.extended_prefix import balanced, shared_starts
 from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the row API lives there)
     EXTENDED_FIELDS,
     IDX,
@@ -40,7 +41,7 @@ from benchmark.problems.timedomain.extended_rows import (  # noqa: F401  (the ro
     valid_rows,
 )
 from benchmark.problems.timedomain.extended_tnode import _t_constants, _t_mode, _t_solve
-from benchmark.problems.timedomain.kernel_pool import run_split
+from benchmark.problems.timedomain.kernel_pool import kernel_threads, run_split
 from benchmark.problems.timedomain.simulation import substep_voltages
 
 N_STATES = 13
@@ -306,15 +307,19 @@ def _stick(c, x, w0, wl0, env, tm):
 
 
 @compiled(_nrt=False)
-def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
+def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm, k_first, snap_at, snaps):
     """Outputs (3, N): i_alpha, i_beta (A), mechanical speed (rad/s) (the load side's on a
     two-mass shaft); final state in x0. ``t0``: time of the first sample (load steps).
     ``work``: (8, N_WORK) scratch (row 7: :func:`_row_constants`); ``warm``: a T-mode row's
-    node flux solved from the last solution (:func:`_t_solve`)."""
+    node flux solved from the last solution (:func:`_t_solve`). ``k_first``: the sample it starts
+    at, from the state ``x0`` and (a T-mode row's node) ``work[6]`` there, the outputs before it
+    left as they are (0: from the start, ``work[6]`` set here). At each sample of ``snap_at``
+    (ascending) the state and ``work[6]`` go to the next row of ``snaps``
+    (:mod:`.extended_prefix`)."""
     n = v_a.shape[0]
     tm = work[6]
     pre = work[7]
-    if _t_mode(c):
+    if _t_mode(c) and k_first == 0:
         _t_constants(c, tm, warm)
     x = work[0]
     for s in range(N_STATES):
@@ -330,7 +335,14 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
     ns = N_STATES if _armature(c) else N_STATES - 1  # the armature's state only where it moves
     xt[N_STATES - 1] = x[N_STATES - 1]
     _row_constants(c, x[7], pre)
-    for k in range(n):
+    q = 0
+    for k in range(k_first, n):
+        while q < snap_at.shape[0] and snap_at[q] == k:
+            for s in range(N_STATES):
+                snaps[q, s] = x[s]
+            for s in range(N_WORK):
+                snaps[q, N_STATES + s] = tm[s]
+            q += 1
         # without a stator-side iron loss the recorded current is the stator branch current at
         # x, which the step's first derivative computes (the same operations): taken from there
         own = c[34] > 0.0 or k == n - 1
@@ -387,28 +399,61 @@ def _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out, t0, work, warm):
 
 
 @compiled(nogil=True)
-def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out):
-    """Rows ``start..stop-1`` of ``rows`` into ``out`` (every entry written: NaN for invalid rows);
-    releases the GIL."""
+def _simulate_block(start, stop, rows, v_a, v_b, linear, h, substeps, out, reps, first, branch, snaps):
+    """Representatives ``reps[start..stop-1]`` from rest into ``out`` (every entry written: NaN
+    for invalid rows), each keeping its state at the branch samples of its members
+    (``first[j]:first[j + 1]`` of ``branch`` and ``snaps``, :mod:`.extended_prefix`); releases
+    the GIL."""
     work = np.empty((8, N_WORK))
     x0 = np.empty(N_STATES)
-    for m in range(start, stop):
-        c = rows[m]
+    for j in range(start, stop):
+        r = reps[j]
+        c = rows[r]
         if not np.isfinite(c[0]):
-            out[m] = np.nan
+            out[r] = np.nan
             continue
         x0[:] = 0.0
-        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[m], 0.0, work, True)
+        a, b = first[j], first[j + 1]
+        _simulate_one(c, v_a, v_b, linear, h, substeps, x0, out[r], 0.0, work, True, 0, branch[a:b], snaps[a:b])
+
+
+@compiled(nogil=True)
+def _resume_block(start, stop, rows, v_a, v_b, linear, h, substeps, out, order, members, source, branch, snaps):
+    """Members ``members[order[start..stop-1]]`` from their representative's state at their branch
+    sample, its outputs before it copied (all of them where it diverged before: no state was
+    kept); releases the GIL."""
+    work = np.empty((8, N_WORK))
+    x0 = np.empty(N_STATES)
+    none = np.empty(0, dtype=np.int64)
+    kept = np.empty((0, N_STATES + N_WORK))
+    for i in range(start, stop):
+        m = order[i]
+        r, src, k = members[m], source[m], branch[m]
+        s = snaps[m]
+        if not np.isfinite(s[0]):
+            out[r] = out[src]
+            continue
+        out[r, :, :k] = out[src, :, :k]
+        x0[:] = s[:N_STATES]
+        work[6, :] = s[N_STATES:]
+        _simulate_one(rows[r], v_a, v_b, linear, h, substeps, x0, out[r], 0.0, work, True, k, none, kept)
 
 
 def simulate_extended_batch(rows, v_a, v_b, linear, h, substeps):
     """Outputs of a population of extended rows from rest: (n_pop, 3, N) i_alpha, i_beta (A),
     mechanical speed (rad/s); NaN from where a candidate diverges (or for invalid rows). The
-    rows run in parallel blocks (:func:`~benchmark.problems.timedomain.kernel_pool.run_split`);
-    a row's outputs do not depend on the blocks."""
+    rows run in parallel blocks (:func:`~benchmark.problems.timedomain.kernel_pool.run_split`),
+    rows that differ only in a switched load from where it may act, from the state of the one
+    that switches last (:mod:`.extended_prefix`); a row's outputs depend on neither."""
     rows, v_a, v_b = (np.ascontiguousarray(a, dtype=float) for a in (rows, v_a, v_b))
     out = np.empty((rows.shape[0], 3, v_a.shape[0]))  # the blocks write every entry
-    run_split(_simulate_block, rows.shape[0], rows, v_a, v_b, bool(linear), float(h), int(substeps), out)
+    plan = shared_starts(rows, float(h), v_a.shape[0])
+    snaps = np.full((len(plan.members), N_STATES + N_WORK), np.nan)
+    args = (rows, v_a, v_b, bool(linear), float(h), int(substeps), out)
+    run_split(_simulate_block, len(plan.representatives), *args, plan.representatives, plan.first, plan.branch, snaps)
+    if len(plan.members):
+        order = balanced(plan.branch, kernel_threads())
+        run_split(_resume_block, len(order), *args, order, plan.members, plan.source, plan.branch, snaps)
     return out
 
 
@@ -417,5 +462,6 @@ def simulate_extended(row, v_a, v_b, linear, h, substeps, x0, t0=0.0):
     """One trajectory from state ``x0`` (modified in place to the final state) starting at time
     ``t0`` (s): (3, N)."""
     out = np.empty((3, v_a.shape[0]))
-    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((8, N_WORK)), False)
+    _simulate_one(row, v_a, v_b, linear, h, substeps, x0, out, t0, np.empty((8, N_WORK)), False, 0,
+                  np.empty(0, dtype=np.int64), np.empty((0, N_STATES + N_WORK)))
     return out
