@@ -58,13 +58,28 @@ def _sat(x, k, ref, ex):
 
 
 @compiled(_nrt=False, inline="always")
-def _leak_gain(c, dmag):
-    """Stator current over (leakage flux / L_sigma): 1 unless the leakage saturates."""
-    sat = _sat(dmag, c[10], c[11], c[12])
+def _leak_constants(c):
+    """A saturating leakage's ``1/ref^2`` (1/Wb^2) and half its exponent, for :func:`_stator_gain`."""
+    return 1.0 / (c[11] * c[11]), 0.5 * c[12]
+
+
+@compiled(_nrt=False, inline="always")
+def _stator_gain(c, d2, inv_ref2, half_ex):
+    """Stator current (A) per leakage flux linkage (Wb) whose squared magnitude is ``d2`` (Wb^2):
+    ``1/L_sigma`` unless the leakage saturates, else ``s / (L_sigma (f s + 1 - f))`` with
+    ``s = 1 + k (|psi|/ref)^ex`` and ``f`` the share that never saturates (``inv_ref2``,
+    ``half_ex``: :func:`_leak_constants`). The power is taken as ``exp(ex/2 log(d2/ref^2))`` and
+    the whole with one division: no square root, power or chain of three divisions on the
+    stepper's latency path."""
+    k = c[10]
+    s = 1.0
+    if k != 0.0:
+        u = d2 * inv_ref2
+        s = 1.0 + k * (math.exp(half_ex * math.log(u)) if u > 0.0 else (1.0 if half_ex == 0.0 else 0.0))
     fl = c[35]
     if fl > 0.0:
-        return 1.0 / (fl + (1.0 - fl) / sat)
-    return sat
+        return s / (c[1] * (fl * s + (1.0 - fl)))
+    return s / c[1]
 
 
 @compiled(_nrt=False, inline="always")
@@ -102,8 +117,9 @@ def _row_constants(c, th, pre):
     """What :func:`_derivative` computes from the row alone, once per trajectory, by the same
     operations (so the same numbers): the resistances at the temperature ``th`` (K), which stays
     put when ``h_th`` is 0, ``1/(1/R_r1 + g_fe)``, ``p/J``, the stator current per leakage flux
-    when the leakage does not saturate and the magnetising current per flux when the main flux
-    does not; into ``pre``."""
+    when the leakage does not saturate (and a saturating leakage's constants,
+    :func:`_leak_constants`, in ``pre[8:10]``) and the magnetising current per flux when the main
+    flux does not; into ``pre``."""
     alpha = c[16]
     heat = 1.0 + alpha * th
     heat_r = 1.0 + alpha * th * (1.0 + c[38])
@@ -113,7 +129,8 @@ def _row_constants(c, th, pre):
     pre[3] = c[39] * heat_r
     pre[4] = 1.0 / (1.0 / pre[1] + c[6])
     pre[5] = c[20] / c[17]
-    pre[6] = _leak_gain(c, 0.0) / c[1]
+    pre[8], pre[9] = _leak_constants(c)
+    pre[6] = _stator_gain(c, 0.0, pre[8], pre[9])
     pre[7] = 1.0 / c[2]
 
 
@@ -121,7 +138,7 @@ def _row_constants(c, th, pre):
 def _derivative(c, x, v_a, v_b, direction, dir_l, env, out, tm, pre):
     """The states' derivatives at ``x`` into ``out`` (and the stator branch current); ``env``: the
     switched load's envelope at the time (:func:`_envelope`). Returns the motor's torque (N m)."""
-    Rs, Ls_, LM, R_r1, R_r2, Ls2 = c[0], c[1], c[2], c[3], c[4], c[5]
+    Rs, LM, R_r1, R_r2, Ls2 = c[0], c[2], c[3], c[4], c[5]
     gfe, ms_k, ms_psi, ms_exp = c[6], c[7], c[8], c[9]
     Ud, i0, h_th, alpha, J, fv, fc, p = c[13], c[14], c[15], c[16], c[17], c[18], c[19], c[20]
     ps_a, ps_b, pm_a, pm_b, p2_a, p2_b, w, th = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
@@ -142,7 +159,7 @@ def _derivative(c, x, v_a, v_b, direction, dir_l, env, out, tm, pre):
     if c[10] == 0.0:
         g = pre[6]
     else:
-        g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / Ls_
+        g = _stator_gain(c, d_a * d_a + d_b * d_b, pre[8], pre[9])
     is_a = d_a * g
     is_b = d_b * g
     p3_a, p3_b = x[10], x[11]
@@ -247,7 +264,8 @@ def _stator_current(c, x, tm):
         return ia, ib
     d_a = x[0] - x[2]
     d_b = x[1] - x[3]
-    g = _leak_gain(c, math.sqrt(d_a * d_a + d_b * d_b)) / c[1]
+    inv_ref2, half_ex = _leak_constants(c)
+    g = _stator_gain(c, d_a * d_a + d_b * d_b, inv_ref2, half_ex)
     return d_a * g, d_b * g
 
 
