@@ -264,7 +264,9 @@ def _stator_current(c, x, tm):
         return ia, ib
     d_a = x[0] - x[2]
     d_b = x[1] - x[3]
-    inv_ref2, half_ex = _leak_constants(c)
+    # the leakage's constants only where it saturates (the gain reads them only there): no division
+    # added to a stator-side iron loss's recorded current, computed here at every sample
+    inv_ref2, half_ex = _leak_constants(c) if c[10] != 0.0 else (1.0, 0.0)
     g = _stator_gain(c, d_a * d_a + d_b * d_b, inv_ref2, half_ex)
     return d_a * g, d_b * g
 
