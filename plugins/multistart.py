@@ -40,6 +40,7 @@ global stage only, on the whole budget. Deterministic for a given ``seed``.
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 
 import numpy as np
@@ -51,6 +52,9 @@ __all__ = ["minimize"]
 
 #: What a run that ends unconfirmed tells the user to try (the suite's results/suite/README.md).
 ADVICE = "budget=30000, or optimizer=cmaes polish=true"
+#: The cost stage's CMA-ES draws from NumPy's global random state (seeded, then restored): runs in
+#: other threads wait for it, so that runs side by side give what each gives alone.
+_GLOBAL_RNG = threading.Lock()
 
 
 class _Coordinates:
@@ -213,8 +217,9 @@ def _cost_stage(problem, coords, best: dict, seed: int, budget: int, sigma0: flo
 
     n_cma = max(n, 2)  # cma 4.5 fails in 1-D
     seeds = np.random.SeedSequence(int(seed)).generate_state(int(runs))
-    saved = np.random.get_state()  # cma samples with NumPy's global state
     used, best_c, done = 1, c0, 0
+    _GLOBAL_RNG.acquire()  # cma samples with NumPy's global state: one such stage at a time
+    saved = np.random.get_state()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -241,6 +246,7 @@ def _cost_stage(problem, coords, best: dict, seed: int, budget: int, sigma0: flo
                     break
     finally:
         np.random.set_state(saved)
+        _GLOBAL_RNG.release()
     return (f"cost stage ({done} CMA-ES run(s) on the cost, in the minimum's Gauss-Newton metric): {c0:.6g} -> "
             f"{best_c:.6g} in {used} evaluations")
 
@@ -369,3 +375,8 @@ def minimize(
     note = "" if budget_left <= 0 else _cost_stage(problem, coords, minima[0], int(rng.integers(2**31)), budget_left,
                                                    float(cost_sigma), float(cost_rtol), int(cost_runs))
     return OptimizerOutput(x=coords.to_x(minima[0]["u"]), nit=nit, message=f"{summary}; {note}" if note else summary)
+
+
+#: Runs of this plugin may go side by side in one process (each deterministic for its seed: no
+#: state outside the run but the cost stage's, under :data:`_GLOBAL_RNG`); docs/plugins.md.
+minimize.concurrent_runs = True

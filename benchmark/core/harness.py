@@ -108,9 +108,13 @@ def run_diagnosis(cfg: DictConfig, outdir: Path, progress=None) -> dict:
     """Diagnose the configured data set into ``outdir`` through the problem's ``diagnose`` hook
     (the truth of synthetic data is discarded here); returns the diagnosis document."""
     dataset, _ = load_dataset(cfg, with_truth=False)
-    base = functools.partial(identify, plugin=instantiate(cfg.optimizer.plugin), budget=int(cfg.budget),
+    plugin = instantiate(cfg.optimizer.plugin)
+    base = functools.partial(identify, plugin=plugin, budget=int(cfg.budget),
                              seed=int(cfg.seed), name=str(cfg.optimizer.name),
                              polish_budget=int(cfg.polish_budget))
+    # runs side by side where the plugin says they may (docs/plugins.md)
+    base.concurrent_runs = bool(getattr(plugin, "concurrent_runs", getattr(getattr(plugin, "func", None),
+                                                                            "concurrent_runs", False)))
     return instantiate(cfg.problem.diagnose)(resolved(cfg), dataset, outdir, base, progress)
 
 

@@ -25,8 +25,18 @@ import numpy as np
 STOP_INERTIA_CONFLICT = 2.0
 
 
+def startup_alone(settings, ds):
+    """The problem of the start-up alone that :func:`stop_record_check` identifies (``fv`` and ``fc``
+    searched), or None where there is no check (no stop record, or J not searched)."""
+    from benchmark.problems.timedomain.problem import problem_from_dataset  # (problem.py imports this module)
+
+    if ds is None or not ds.stops or ds.inertia is not None or settings.known_inertia is not None:
+        return None
+    return problem_from_dataset(settings, dataclasses.replace(ds, stops=[]), truth=None)
+
+
 def stop_record_check(settings, ds, problem, ident, identify: Callable,
-                      seed: int) -> tuple[dict, object, object] | None:
+                      seed: int, alone_identified: tuple | None = None) -> tuple[dict, object, object] | None:
     """Whether the stop record is a free coast of the machine the start-up shows: the start-up
     fitted alone (``fv`` and ``fc`` searched, one seed) must find a J within a factor
     :data:`STOP_INERTIA_CONFLICT` of the J of the fit that takes ``tau_m`` and ``fc/J`` from the
@@ -36,7 +46,8 @@ def stop_record_check(settings, ds, problem, ident, identify: Callable,
     worse basin (blind plant seed 18, set 3: J 0.16 of the truth, the stop's J right) keeps the
     stop. ``settings`` are the problem's :class:`~benchmark.problems.timedomain.settings.
     TimeDomainSettings`, ``ds`` the data set it was made from, ``ident`` its identification
-    (``.x``), ``identify(problem, seed=...)`` the identification to run on the start-up alone.
+    (``.x``), ``identify(problem, seed=...)`` the identification to run on the start-up alone
+    (``alone_identified``: the :func:`startup_alone` problem and its identification, already run).
     Returns the record of the check, the start-up-alone problem and its identification; None
     when there is no stop record or J is not searched.
 
@@ -47,12 +58,13 @@ def stop_record_check(settings, ds, problem, ident, identify: Callable,
     0.96-1.00), and three of those five had been diagnosed `unexplained` at 47-99 times the
     noise. A later draw flagged a sixth such start, with a fan load at 56 % of rated torque
     (ratio 0.34, J with the stop 0.33 of the truth)."""
-    from benchmark.problems.timedomain.problem import problem_from_dataset  # (problem.py imports this module)
-
-    if ds is None or not ds.stops or ds.inertia is not None or settings.known_inertia is not None:
-        return None
-    alone = problem_from_dataset(settings, dataclasses.replace(ds, stops=[]), truth=None)
-    ident_alone = identify(alone, seed=seed)
+    if alone_identified is not None:
+        alone, ident_alone = alone_identified
+    else:
+        alone = startup_alone(settings, ds)
+        if alone is None:
+            return None
+        ident_alone = identify(alone, seed=seed)
     if ident_alone.x is None:
         return None
     with_stop = problem.estimate(ident.x)

@@ -85,6 +85,27 @@ def test_a_free_coast_keeps_its_stop_record(tmp_path):
 
 
 
+def test_the_base_identifications_side_by_side_give_what_they_give_one_after_another(tmp_path):
+    """The base's two seeds and the start-up-alone search run side by side where the optimiser
+    says its runs may (the default's does: ``minimize.concurrent_runs``); the same numbers."""
+    made = make_dataset(make_spec("simulink_7k5", "dol", [], seed=1, duration=0.8, stop=3.0))
+    ds = condition_dataset(load_startup_dataset(write_dataset(made, tmp_path / "dol")))
+    cfg = compose_config([f"data.path={tmp_path / 'dol'}"], name="diagnose")
+    plugin = instantiate(cfg.optimizer.plugin)
+    assert plugin.func.concurrent_runs
+    out = {}
+    for concurrent in (False, True):
+        ident = functools.partial(identify, plugin=plugin, budget=int(cfg.budget), name=str(cfg.optimizer.name),
+                                  polish_budget=int(cfg.polish_budget))
+        ident.concurrent_runs = concurrent
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out[concurrent] = run_mod.identify_base(TimeDomainSettings(), ds, 2, ident, seed=0)
+    (est_a, ds_a, rec_a), (est_b, ds_b, rec_b) = out[False], out[True]
+    assert est_a == est_b and rec_a == rec_b  # bit for bit
+    assert len(rec_b["runs"]) == 2 and rec_b["stop_record"]["used"]
+
+
 def test_a_start_up_alone_search_in_a_worse_basin_keeps_the_stop(tmp_path):
     """The check's second condition (blind plant seed 18, set 3: a 7.5 kW PWM start whose
     start-up-alone search ended with J at 0.16 of the truth while the fit with the stop had it

@@ -18,8 +18,8 @@ import threading
 from dataclasses import dataclass, field, fields
 
 import numpy as np
-from scipy import optimize
 
+from benchmark.core.capped_least_squares import capped_least_squares
 from benchmark.core.effects import Effect, EffectContext
 from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.core.uncertainty import hac_covariance, standard_errors
@@ -407,9 +407,9 @@ class JointModel:
             return x_held
         u0 = (x_held[free] - lo_f) / width
         with quiet():
-            sol = optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale="jac",
-                                         xtol=tol, ftol=tol, gtol=1e-8, max_nfev=max_iterations)
-        self.data.fits.record(max_iterations, sol.status == 0)  # status 0: stopped at max_nfev
+            sol, at_cap = capped_least_squares(fun, jac, u0, max_iterations, bounds=(0.0, 1.0), x_scale="jac",
+                                               xtol=tol, ftol=tol, gtol=1e-8)
+        self.data.fits.record(max_iterations, at_cap)
         return to_x(sol.x[None, :])[0]
 
     def prior(self, X: np.ndarray) -> np.ndarray:

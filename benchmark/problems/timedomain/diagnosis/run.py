@@ -21,12 +21,13 @@ from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
 from benchmark.core.nuisance import refine_nuisance
 from benchmark.problems.timedomain.data import StartupDataset
+from benchmark.problems.timedomain.diagnosis.engine import side_by_side
 from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, diagnose
 from benchmark.problems.timedomain.motor import PARAMETER_UNITS
 from benchmark.problems.timedomain.problem import problem_from_dataset
 from benchmark.problems.timedomain.settings import TimeDomainSettings
 from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C, copper_temperature
-from benchmark.problems.timedomain.stop_record import stop_record_check, stop_record_lines
+from benchmark.problems.timedomain.stop_record import startup_alone, stop_record_check, stop_record_lines
 
 
 def diagnosis_settings(run: Mapping) -> DiagnosisSettings:
@@ -62,16 +63,21 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None,
                                    stator_resistance=rs_mode)
     problem = problem_from_dataset(settings, ds, truth=None)
-    runs = []
-    for offset in BASE_SEED_OFFSETS:
-        ident = identify(problem, seed=int(seed) + offset)
-        runs.append((ident.cost if ident.x is not None else math.inf, int(seed) + offset, ident))
+    alone = startup_alone(settings, ds)
+    jobs = [(problem, int(seed) + offset) for offset in BASE_SEED_OFFSETS] + ([(alone, int(seed))] if alone else [])
+    # the runs are independent: side by side where the optimiser's runs are deterministic so (it says so)
+    run_jobs = side_by_side if getattr(identify, "concurrent_runs", False) else (lambda fn, xs: [fn(x) for x in xs])
+    idents = run_jobs(lambda job: identify(job[0], seed=job[1]), jobs)
+    runs = [(ident.cost if ident.x is not None else math.inf, s, ident)
+            for (_, s), ident in zip(jobs[:len(BASE_SEED_OFFSETS)], idents, strict=False)]
     cost, kept_seed, ident = min(runs, key=lambda r: r[0])
     record = {"runs": [{"seed": s, "cost": c} for c, s, _ in runs], "kept_seed": kept_seed,
               "agree": bool(max(c for c, _, _ in runs) <= (1 + 1e-3) * cost)}
     if ident.x is None:
         raise ConfigError(f"optimizer: the base identification failed ({ident.result.message})")
-    check = stop_record_check(settings, ds, problem, ident, identify, int(seed))
+    check = None
+    if alone is not None and idents[-1].x is not None:
+        check = stop_record_check(settings, ds, problem, ident, identify, int(seed), (alone, idents[-1]))
     if check is not None:
         record["stop_record"], alone, ident_alone = check
         if not record["stop_record"]["used"]:
