@@ -112,10 +112,14 @@ def run_diagnosis(cfg: DictConfig, outdir: Path, progress=None) -> dict:
     base = functools.partial(identify, plugin=plugin, budget=int(cfg.budget),
                              seed=int(cfg.seed), name=str(cfg.optimizer.name),
                              polish_budget=int(cfg.polish_budget))
-    # runs side by side where the plugin says they may (docs/plugins.md)
-    base.concurrent_runs = bool(getattr(plugin, "concurrent_runs", getattr(getattr(plugin, "func", None),
-                                                                            "concurrent_runs", False)))
+    base.concurrent_runs = concurrent_runs(plugin)
     return instantiate(cfg.problem.diagnose)(resolved(cfg), dataset, outdir, base, progress)
+
+
+def concurrent_runs(plugin) -> bool:
+    """Whether the plugin says its runs may go side by side in one process (``concurrent_runs =
+    True`` on its function, also behind a configured partial; docs/plugins.md)."""
+    return bool(getattr(plugin, "concurrent_runs", getattr(getattr(plugin, "func", None), "concurrent_runs", False)))
 
 
 def package_versions() -> dict[str, str]:

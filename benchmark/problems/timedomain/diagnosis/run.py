@@ -65,11 +65,12 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     problem = problem_from_dataset(settings, ds, truth=None)
     alone = startup_alone(settings, ds)
     jobs = [(problem, int(seed) + offset) for offset in BASE_SEED_OFFSETS] + ([(alone, int(seed))] if alone else [])
-    # the runs are independent: side by side where the optimiser's runs are deterministic so (it says so)
+    # independent runs: side by side where the optimiser says its runs give there what they give alone
     run_jobs = side_by_side if getattr(identify, "concurrent_runs", False) else (lambda fn, xs: [fn(x) for x in xs])
     idents = run_jobs(lambda job: identify(job[0], seed=job[1]), jobs)
+    n_base = len(BASE_SEED_OFFSETS)
     runs = [(ident.cost if ident.x is not None else math.inf, s, ident)
-            for (_, s), ident in zip(jobs[:len(BASE_SEED_OFFSETS)], idents, strict=False)]
+            for (_, s), ident in zip(jobs[:n_base], idents[:n_base], strict=True)]
     cost, kept_seed, ident = min(runs, key=lambda r: r[0])
     record = {"runs": [{"seed": s, "cost": c} for c, s, _ in runs], "kept_seed": kept_seed,
               "agree": bool(max(c for c, _, _ in runs) <= (1 + 1e-3) * cost)}
