@@ -218,35 +218,34 @@ def _cost_stage(problem, coords, best: dict, seed: int, budget: int, sigma0: flo
     n_cma = max(n, 2)  # cma 4.5 fails in 1-D
     seeds = np.random.SeedSequence(int(seed)).generate_state(int(runs))
     used, best_c, done = 1, c0, 0
-    _GLOBAL_RNG.acquire()  # cma samples with NumPy's global state: one such stage at a time
-    saved = np.random.get_state()
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for k in range(int(runs)):
-                start_c = best_c
-                opts = {"seed": int(seeds[k]) % (2**31 - 2) + 1, "maxfevals": int(budget - used),
-                        "tolfun": float(rtol) * abs(best_c), "tolx": 1e-6, "verbose": -9, "verb_log": 0,
-                        "verb_disp": 0}
-                es = cma.CMAEvolutionStrategy(np.zeros(n_cma), float(sigma0), opts)
-                origin = u_b.copy()
-                while not es.stop() and used < budget and problem.remaining > 0:
-                    Z = es.ask()
-                    U = np.clip(origin[None, :] + np.asarray(Z, float)[:, :n] @ L.T, 0.0, 1.0)
-                    m = min(len(U), problem.remaining, budget - used)
-                    c = np.full(len(U), np.inf)
-                    c[:m] = _finite(problem.evaluate(coords.to_x(U[:m])))
-                    used += m
-                    i = int(np.argmin(c))
-                    if c[i] < best_c:
-                        best_c, u_b = float(c[i]), U[i].copy()
-                    es.tell(Z, list(np.where(np.isfinite(c), c, 1e300)))
-                done += 1
-                if start_c - best_c <= 1e-6 * abs(start_c) or used >= budget or problem.remaining <= 0:
-                    break
-    finally:
-        np.random.set_state(saved)
-        _GLOBAL_RNG.release()
+    with _GLOBAL_RNG:  # cma samples with NumPy's global state: one such stage at a time
+        saved = np.random.get_state()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                for k in range(int(runs)):
+                    start_c = best_c
+                    opts = {"seed": int(seeds[k]) % (2**31 - 2) + 1, "maxfevals": int(budget - used),
+                            "tolfun": float(rtol) * abs(best_c), "tolx": 1e-6, "verbose": -9, "verb_log": 0,
+                            "verb_disp": 0}
+                    es = cma.CMAEvolutionStrategy(np.zeros(n_cma), float(sigma0), opts)
+                    origin = u_b.copy()
+                    while not es.stop() and used < budget and problem.remaining > 0:
+                        Z = es.ask()
+                        U = np.clip(origin[None, :] + np.asarray(Z, float)[:, :n] @ L.T, 0.0, 1.0)
+                        m = min(len(U), problem.remaining, budget - used)
+                        c = np.full(len(U), np.inf)
+                        c[:m] = _finite(problem.evaluate(coords.to_x(U[:m])))
+                        used += m
+                        i = int(np.argmin(c))
+                        if c[i] < best_c:
+                            best_c, u_b = float(c[i]), U[i].copy()
+                        es.tell(Z, list(np.where(np.isfinite(c), c, 1e300)))
+                    done += 1
+                    if start_c - best_c <= 1e-6 * abs(start_c) or used >= budget or problem.remaining <= 0:
+                        break
+        finally:
+            np.random.set_state(saved)
     return (f"cost stage ({done} CMA-ES run(s) on the cost, in the minimum's Gauss-Newton metric): {c0:.6g} -> "
             f"{best_c:.6g} in {used} evaluations")
 

@@ -64,7 +64,8 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
                                    stator_resistance=rs_mode)
     problem = problem_from_dataset(settings, ds, truth=None)
     alone = startup_alone(settings, ds)
-    jobs = [(problem, int(seed) + offset) for offset in BASE_SEED_OFFSETS] + ([(alone, int(seed))] if alone else [])
+    jobs = [(problem, int(seed) + offset) for offset in BASE_SEED_OFFSETS]
+    jobs += [(alone, int(seed))] if alone is not None else []
     # independent runs: side by side where the optimiser says its runs give there what they give alone
     run_jobs = side_by_side if getattr(identify, "concurrent_runs", False) else (lambda fn, xs: [fn(x) for x in xs])
     idents = run_jobs(lambda job: identify(job[0], seed=job[1]), jobs)
@@ -76,9 +77,8 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
               "agree": bool(max(c for c, _, _ in runs) <= (1 + 1e-3) * cost)}
     if ident.x is None:
         raise ConfigError(f"optimizer: the base identification failed ({ident.result.message})")
-    check = None
-    if alone is not None and idents[-1].x is not None:
-        check = stop_record_check(settings, ds, problem, ident, identify, int(seed), (alone, idents[-1]))
+    check = None if alone is None else stop_record_check(settings, ds, problem, ident, identify, int(seed),
+                                                         (alone, idents[-1]))
     if check is not None:
         record["stop_record"], alone, ident_alone = check
         if not record["stop_record"]["used"]:
