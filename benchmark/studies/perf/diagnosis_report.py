@@ -39,6 +39,24 @@ def same_verdict(a: dict, b: dict) -> tuple[bool, str]:
     return ok, f"{d_share:.1e} / {d_gap:.1e}"
 
 
+#: A summary's keys that time a run rather than say what it computed.
+TIMING_KEYS = ("wall_s", "cpu_s", "load_before", "inside_wall_s", "inside_cpu_s")
+
+
+def identical(a: dict, b: dict) -> bool:
+    """Whether two diagnoses' summaries are the same to the last digit, timings apart: then the
+    two runs computed the same thing, and their CPU ratio is the machine's own spread."""
+    return {k: v for k, v in a.items() if k not in TIMING_KEYS} == {k: v for k, v in b.items() if k not in TIMING_KEYS}
+
+
+def same_computation_spread(runs: dict) -> tuple[int, float, float] | None:
+    """(count, lowest, highest) CPU ratio reference/new over the records whose two runs are
+    :func:`identical`; None where fewer than two are. A ratio within that range measures nothing."""
+    ratios = [r["reference"]["cpu_s"] / r["new"]["cpu_s"] for r in runs.values()
+              if r.get("reference") and identical(r["new"], r["reference"])]
+    return (len(ratios), min(ratios), max(ratios)) if len(ratios) >= 2 else None
+
+
 def _describe(name: str) -> str:
     source, options = next((s, o) for n, s, o in RECORDS if n == name)
     return {"plant": "independent plant", "own": "own plant", "motulator": "motulator"}[source]
@@ -76,6 +94,11 @@ def render(runs: dict) -> str:
                    f"(median; {min(ratios_wall):.2f}-{max(ratios_wall):.2f}). Verdicts: {sum(checks)} of {len(checks)} "
                    f"the same (effects named, status, pruned, weak effects; shares within {SHARE_TOLERANCE}, gaps "
                    f"within {100 * GAP_TOLERANCE:.1f} %).")
+        spread = same_computation_spread(runs)
+        if spread:
+            out.append(f"The machine's own spread: on the {spread[0]} records whose two runs computed the same "
+                       f"summary to the last digit, CPU ratios {spread[1]:.2f}-{spread[2]:.2f}; a ratio within that "
+                       f"range is not a measured difference.")
     return "\n".join(out)
 
 
