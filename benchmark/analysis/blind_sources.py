@@ -56,6 +56,31 @@ def stated_skew(settings: BlindSettings, d: dict, injected: float | None) -> flo
     return float(rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 2.0))
 
 
+#: Share of the sets whose speed channel has no filter where ``meta.yaml`` still states one (an
+#: instrument documented with a filter that the record's channel does not show): the
+#: tachometer's filter is searched there and must not earn a name.
+STATED_FILTER_WITHOUT = 0.3
+
+
+def stated_filter(settings: BlindSettings, d: dict, injected: float | None) -> float | None:
+    """The speed filter (s) draw ``d``'s ``meta.yaml`` states (``speed_filter``): the injected
+    tachometer's (an RC filter's time constant, an encoder's gate time), else with probability
+    :data:`STATED_FILTER_WITHOUT` one of 1-5 ms the record does not carry, else none. Drawn from
+    the set's own stream (the other draws do not change)."""
+    if injected:
+        return float(injected)
+    rng = np.random.default_rng([int(settings.seed), int(d["index"]), 8])
+    if rng.random() >= STATED_FILTER_WITHOUT:
+        return None
+    return float(rng.uniform(1e-3, 5e-3))
+
+
+def state_filter(folder: Path, tau: float | None) -> None:
+    """Write ``speed_filter`` (s) into ``folder/meta.yaml`` (nothing when ``tau`` is None)."""
+    if tau is not None:
+        _set_meta(folder, "speed_filter", float(tau))
+
+
 def card_sequence(skew: dict, kind: str) -> dict:
     """The ``channel_skew`` mapping a multiplexed card's documentation gives for the plant's
     ``mux_skew`` draw ``skew`` (its channels ``order`` converted ``size`` samples apart); an
@@ -102,10 +127,12 @@ def own_source(settings: BlindSettings):
             sign = -1.0 if d["form"].get("channel_delay", {}).get("lag", lag) == "voltage" else 1.0
             injected = sign * d["size"]["channel_delay"]
         d["channel_skew"] = stated_skew(settings, d, injected)
+        d["speed_filter"] = stated_filter(settings, d, None)  # the own plant's tachometer has no filter
 
     def make(d, folder):
         generate(generator_config(settings, d), folder)
         state_skew(folder, d.get("channel_skew"))
+        state_filter(folder, d.get("speed_filter"))
 
     return draws, make
 
@@ -140,6 +167,8 @@ def plant_source(settings: BlindSettings):
         if skew is not None and skew["form"] == "mux_skew":
             injected = card_sequence(skew, kind)
         d["channel_skew"] = stated_skew(settings, d, injected)
+        tach = next((e for e in spec["effects"] if e["name"] == "speed_sensor_gain"), {})
+        d["speed_filter"] = stated_filter(settings, d, tach.get("time_constant") or tach.get("gate_time"))
         draws.append(d)
 
     def make(d, folder):
@@ -150,6 +179,7 @@ def plant_source(settings: BlindSettings):
             eff = next(e for e in made.truth["effects"] if e["name"] == "channel_delay")
             skew = card_sequence({**eff, "size": eff.get("achieved_size", eff["size"])}, d["scenario"])
         state_skew(folder, skew)
+        state_filter(folder, d.get("speed_filter"))
 
     return draws, make
 
@@ -247,11 +277,13 @@ def motulator_source(settings: BlindSettings):
         noise["current_colored_std"] *= current_scale
         draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
                       "motor_name": name, "noise": noise, "seed": seed})
+        draws[-1]["speed_filter"] = stated_filter(settings, draws[-1], None)  # motulator's speed is unfiltered
 
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
                                settings.duration, settings.sample_rate, settings.motulator_stop)
         blind_description(Path(folder), f"motulator simulation: {d['scenario']} start")
+        state_filter(Path(folder), d.get("speed_filter"))
 
     return draws, make
 

@@ -171,9 +171,13 @@ class SpeedSensorGain(Effect):
     FIRST_FORM = {"tach_ripple_sin": 0.0, "tach_ripple_cos": 0.0, "tach_lag": 0.0}
     extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed", "s")
     physics = "tachometer gain error, offset, ripple at the rotation frequency and output filter"
-    #: The longest output filter a speed sensor has (s): a tachogenerator's RC filter or an
-    #: encoder's gate time, a few milliseconds.
-    MAX_LAG = 0.01
+    #: The output filter (a tachogenerator's RC filter, an encoder's gate time: milliseconds) is
+    #: a fact of the instrument: it is searched only up to what ``meta.yaml`` states
+    #: (``speed_filter``), and held at none where nothing is stated (searched up to 10 ms on
+    #: every record, it took what a foreign form left in the speed: a slip clutch, a load).
+    #: Relative tolerance of a stated filter: an RC filter's components, a gate time's
+    #: equivalent first-order lag (about half of it, within the stated value).
+    FILTER_TOLERANCE = 0.25
     #: ... and the shortest one that is there for a reason (s): 1 ms.
     SHORTEST_LAG = 1e-3
     shows_in = "steady speed off synchronous-minus-slip; a constant ratio in the speed residual"
@@ -201,9 +205,15 @@ class SpeedSensorGain(Effect):
             return -self.MAX_OFFSET, self.MAX_OFFSET
         return (rest["mean"] - rest["band"]) / ctx.w_sync, (rest["mean"] + rest["band"]) / ctx.w_sync
 
+    def longest_lag(self, facts) -> float:
+        """The longest output filter (s) the fits may give the tachometer: what ``meta.yaml``
+        states (``speed_filter``) with :data:`FILTER_TOLERANCE`, else 0 (no filter)."""
+        stated = (facts or {}).get("speed_filter")
+        return (1.0 + self.FILTER_TOLERANCE) * float(stated) if stated else 0.0
+
     def extra_bounds(self, ctx):
         lo, hi = self._offset_range(ctx)
-        return np.array([-0.1, lo, -0.05, -0.05, 0.0]), np.array([0.1, hi, 0.05, 0.05, self.MAX_LAG])
+        return np.array([-0.1, lo, -0.05, -0.05, 0.0]), np.array([0.1, hi, 0.05, 0.05, self.longest_lag(ctx.facts)])
 
     def extra_starts(self, ctx):
         lo, hi = self._offset_range(ctx)

@@ -49,7 +49,11 @@ SYNC_SPEED_MARGIN = 1.5
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
              "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
-             "conditioning", "chord_voltage", "channel_skew")
+             "conditioning", "chord_voltage", "channel_skew", "speed_filter")
+#: The longest speed filter meta.yaml may state (s): a tachogenerator's RC filter or an
+#: encoder's gate time are milliseconds; a tenth of a second would be a filter on the
+#: dynamics the record is there to show.
+MAX_SPEED_FILTER = 0.1
 #: Keys of ``nameplate`` in meta.yaml: rated power (W), voltage (V line-line rms), current (A rms),
 #: speed (rpm), frequency (Hz).
 NAMEPLATE_KEYS = ("rated_power", "voltage", "current", "speed", "frequency")
@@ -133,6 +137,10 @@ class StartupDataset:
         (a mapping of phase channels to samples, :mod:`~benchmark.problems.timedomain.channel_timing`;
         its voltage skews are undone on reading), or None (channels sampled at once, or not
         stated): ``channel_delay`` is a candidate only where it is stated.
+    speed_filter : the longest time constant of the speed channel's filtering, s (a
+        tachogenerator's RC filter, or an encoder's gate time, over which it averages), as the
+        instrument's data sheet or the drive's setting gives it, or None (not stated: the speed
+        is read unfiltered): the tachometer's output filter is searched up to it only.
     conditioning : what the conditioning on load did (plain-English lines for report.md).
     conditioning_removed : the effects it found and removed (``sensor_offset``,
         ``current_sensor_saturation``): the diagnosis checks each by its rule and lists those kept.
@@ -152,6 +160,7 @@ class StartupDataset:
     winding_temperature: float | None = None
     nameplate: dict | None = None
     channel_skew: float | tuple[float, float] | dict[str, float] | None = None
+    speed_filter: float | None = None
     conditioning: list[str] = field(default_factory=list)
     conditioning_removed: list[str] = field(default_factory=list)
 
@@ -163,10 +172,11 @@ class StartupDataset:
     def facts(self) -> dict:
         """What the experiment is, for screening candidate effects: ``dc_link_voltage``,
         ``input_hold``, ``supply_frequency``, ``has_speed``, ``has_stop``, ``channel_skew``,
-        ``nameplate``."""
+        ``speed_filter``, ``nameplate``."""
         return {"dc_link_voltage": self.dc_link_voltage, "input_hold": self.input_hold,
                 "supply_frequency": self.supply_frequency, "has_speed": self.has_speed,
-                "has_stop": bool(self.stops), "channel_skew": self.channel_skew, "nameplate": self.nameplate}
+                "has_stop": bool(self.stops), "channel_skew": self.channel_skew, "speed_filter": self.speed_filter,
+                "nameplate": self.nameplate}
 
     def meta(self) -> dict:
         m = {
@@ -178,7 +188,7 @@ class StartupDataset:
         if self.chord_voltage:
             m["chord_voltage"] = True
         for key in ("dc_link_voltage", "supply_frequency", "inertia", "stator_dc_resistance",
-                    "winding_temperature"):
+                    "winding_temperature", "speed_filter"):
             if getattr(self, key) is not None:
                 m[key] = float(getattr(self, key))
         if self.nameplate:
@@ -234,6 +244,8 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])
     if meta.get("channel_skew") is not None:
         optional["channel_skew"] = parse_channel_skew(meta_path, meta["channel_skew"])
+    if meta.get("speed_filter") is not None:
+        optional["speed_filter"] = _speed_filter(meta_path, meta["speed_filter"])
     chord = meta.get("chord_voltage", False)
     if not isinstance(chord, bool):
         raise DataError(meta_path, f"key 'chord_voltage' must be true or false, got {_short_repr(chord)}")
@@ -267,6 +279,15 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
 
         ds = condition_dataset(ds)
     return ds
+
+
+def _speed_filter(meta_path: Path, value) -> float:
+    """``speed_filter`` of meta.yaml: seconds, 0 to :data:`MAX_SPEED_FILTER`."""
+    tau = check_meta_type(meta_path, "speed_filter", value, float)
+    if not 0.0 <= tau <= MAX_SPEED_FILTER:
+        raise DataError(meta_path, f"key 'speed_filter' must be in seconds, 0 to {MAX_SPEED_FILTER:g} (the speed "
+                                   f"channel's filter time constant or gate time), got {_short_repr(value)}")
+    return float(tau)
 
 
 def _nameplate(meta_path: Path, value) -> dict:

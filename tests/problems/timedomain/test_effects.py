@@ -52,10 +52,13 @@ def test_every_new_effect_is_in_the_catalogue_with_documented_ranges():
         eff = EFFECTS[name]
         lo, hi = eff.realistic
         assert 0 < lo < hi and eff.physics and eff.shows_in
-        elo, ehi = eff.extra_bounds(_ctx())
+        stated = _ctx(facts={"speed_filter": 3e-3, "channel_skew": 0.5})  # the facts that open a box
+        elo, ehi = eff.extra_bounds(stated)
         assert len(elo) == len(eff.extra_names) == len(ehi) and np.all(elo < ehi)
-        for s in eff.extra_starts(_ctx()):
-            assert np.all((elo <= s) & (s <= ehi)), name
+        for ctx in (stated, _ctx()):
+            lo, hi = eff.extra_bounds(ctx)
+            for s in eff.extra_starts(ctx):
+                assert np.all((lo <= s) & (s <= hi)), name
     assert EFFECTS["current_sensor_saturation"].realistic == (0.3, 0.6)
     assert EFFECTS["two_mass"].realistic == (30.0, 200.0)
 
@@ -397,9 +400,18 @@ class _JointFit:
             R = self.residuals(X, eff, self.meas)
             return ((R[1:] - R[0]) / dx[:, None]).T
 
-        sol = min((least_squares(lambda x: self.residuals(x, eff, self.meas)[0], np.clip(starts[k], lo, hi), jac=jac,
-                                 bounds=(lo, hi), x_scale=0.1 * (hi - lo), max_nfev=max_nfev)
+        free = lo < hi  # an extra whose box a fact closes (an unstated speed filter) is held
+
+        def full(z):
+            x = lo.copy()
+            x[free] = z
+            return x
+
+        sol = min((least_squares(lambda z: self.residuals(full(z), eff, self.meas)[0], np.clip(starts[k], lo, hi)[free],
+                                 jac=lambda z: jac(full(z))[:, free], bounds=(lo[free], hi[free]),
+                                 x_scale=0.1 * (hi - lo)[free], max_nfev=max_nfev)
                    for k in tied), key=lambda s: s.cost)
+        sol.x = full(sol.x)
         ms = {k: float(np.mean(self.residuals(sol.x, eff, target)[0] ** 2))
               for k, target in (("noisy", self.meas), ("clean", self.clean))}
         return sol.x, ms

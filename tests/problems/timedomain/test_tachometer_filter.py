@@ -9,6 +9,10 @@ had a gain, an offset and a once-per-revolution ripple, and the verdict was
 the filter's time constant among its parameters (0-10 ms: an RC filter on a tachogenerator,
 an encoder's gate time), the gain alone explains the record. The plant's form is retired from
 its held-out forms since (an encoder's gate-time mean is held out in its place).
+
+The filter is a fact of the instrument: ``meta.yaml`` states it (``speed_filter``, as the blind
+draws state an injected one) and the fit searches it up to that; where nothing is stated it is
+held at none, and the same record is then not explained by the tachometer alone.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from __future__ import annotations
 import pytest
 import yaml
 
+from benchmark.analysis.blind_sources import state_filter
 from tests.conftest import diagnose_with, remade_blind_set
 
 TACHOMETER_FILTER = yaml.safe_load("""
@@ -41,6 +46,7 @@ seed: 1085214444
 @pytest.mark.slow
 def test_a_filtered_tachometer_is_explained_by_its_gain_and_lag(tmp_path):
     _, folder = remade_blind_set(TACHOMETER_FILTER, tmp_path / "set")
+    state_filter(folder, TACHOMETER_FILTER["effects"][0]["time_constant"])
     doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain", "two_mass", "load_torque"])
     assert doc["verdict"] == "speed_sensor_gain", doc["selection"]
     assert doc["status"] == "explained"
@@ -50,3 +56,16 @@ def test_a_filtered_tachometer_is_explained_by_its_gain_and_lag(tmp_path):
     lag, gain = fitted["tach_lag"], fitted["tach_gain_error"]
     assert lag["value"] == pytest.approx(0.0031687, abs=3 * lag["standard_error"] + 1e-4)
     assert gain["value"] == pytest.approx(0.0370559, abs=3 * gain["standard_error"] + 2e-4)
+
+
+@pytest.mark.slow
+def test_an_unstated_filter_is_not_searched(tmp_path):
+    """The same record without ``speed_filter``: the tachometer's lag is held at none, and its
+    gain and offset alone leave the shaft's lag (``tau dw/dt``) in the speed."""
+    _, folder = remade_blind_set(TACHOMETER_FILTER, tmp_path / "set")
+    doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain"])
+    assert doc["facts"]["speed_filter"] is None
+    tach = [p for p in doc["per_effect"] if p["effect"] == "speed_sensor_gain"]
+    if tach:
+        assert tach[0]["parameters"]["tach_lag"]["value"] == 0.0
+    assert doc["gap_after"]["heldout_rms_over_noise"] > 2.0 * doc["gap_after"]["noise_band"][1]
