@@ -460,3 +460,30 @@ def test_pooled_draws_are_scored_as_one_set_of_rows(tmp_path, capsys):
     assert "| plant | 1/2, 50 % (9-91 %) | 1/2, 50 % (9-91 %) | 0/1, 0 % (0-79 %) | 1/4, 25 % (5-70 %) |" in out
     with pytest.raises(SystemExit, match="no SOURCE/blind.json"):
         blind_pool.main([str(tmp_path)])
+
+
+def test_a_blind_set_states_its_tachometers_filter_and_some_sets_one_they_do_not_carry():
+    """``speed_filter`` (meta.yaml) is a fact of the instrument: a plant set whose tachometer
+    has a filter or a gate time states it; of the others about :data:`STATED_FILTER_WITHOUT`
+    state one their channel does not carry (so that a stated filter says nothing of the truth),
+    drawn from the set's own stream (the rest of the draw is the one made before)."""
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    from benchmark.analysis.blind import BlindSettings
+    from benchmark.analysis.blind_sources import SOURCES, STATED_FILTER_WITHOUT
+
+    conf = str(Path(__file__).resolve().parents[2] / "conf")
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        s = BlindSettings.from_run(compose("blind", overrides=["source=plant", "n=60", "seed=5", "forms=heldout",
+                                                               "only_effects=[speed_sensor_gain,two_mass]"]))
+    draws, _ = SOURCES["plant"](s)
+    with_tach = [d for d in draws if "speed_sensor_gain" in d["effects"]]
+    assert with_tach and all(
+        d["speed_filter"] == next(e["gate_time"] for e in d["spec"]["effects"] if e["name"] == "speed_sensor_gain")
+        for d in with_tach)
+    without = [d["speed_filter"] for d in draws if "speed_sensor_gain" not in d["effects"]]
+    stated = [v for v in without if v is not None]
+    assert all(1e-3 <= v <= 5e-3 for v in stated)
+    assert abs(len(stated) / len(without) - STATED_FILTER_WITHOUT) < 0.2, (len(stated), len(without))

@@ -171,11 +171,7 @@ class SpeedSensorGain(Effect):
     FIRST_FORM = {"tach_ripple_sin": 0.0, "tach_ripple_cos": 0.0, "tach_lag": 0.0}
     extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed", "s")
     physics = "tachometer gain error, offset, ripple at the rotation frequency and output filter"
-    #: The output filter (a tachogenerator's RC filter, an encoder's gate time: milliseconds) is
-    #: a fact of the instrument: it is searched only up to what ``meta.yaml`` states
-    #: (``speed_filter``), and held at none where nothing is stated (searched up to 10 ms on
-    #: every record, it took what a foreign form left in the speed: a slip clutch, a load).
-    #: Relative tolerance of a stated filter: an RC filter's components, a gate time's
+    #: Relative tolerance of a stated filter (:meth:`longest_lag`): an RC filter's components, a gate time's
     #: equivalent first-order lag (about half of it, within the stated value).
     FILTER_TOLERANCE = 0.25
     #: ... and the shortest one that is there for a reason (s): 1 ms.
@@ -207,7 +203,11 @@ class SpeedSensorGain(Effect):
 
     def longest_lag(self, facts) -> float:
         """The longest output filter (s) the fits may give the tachometer: what ``meta.yaml``
-        states (``speed_filter``) with :data:`FILTER_TOLERANCE`, else 0 (no filter)."""
+        states (``speed_filter``) with :data:`FILTER_TOLERANCE`, else 0 (no filter). The filter
+        (a tachogenerator's RC filter, an encoder's gate time: milliseconds) is a fact of the
+        instrument, as a card's channel skew is: searched up to 10 ms on every record, it took
+        what a foreign form left in the speed (a slip clutch read as a tachometer with its lag
+        at that bound, blind plant seed 459)."""
         stated = (facts or {}).get("speed_filter")
         return (1.0 + self.FILTER_TOLERANCE) * float(stated) if stated else 0.0
 
