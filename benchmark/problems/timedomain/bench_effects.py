@@ -207,7 +207,7 @@ class SpeedSensorGain(Effect):
         (a tachogenerator's RC filter, an encoder's gate time: milliseconds) is a fact of the
         instrument, as a card's channel skew is: searched up to 10 ms on every record, it took
         what a foreign form left in the speed (a slip clutch read as a tachometer with its lag
-        at that bound, blind plant seed 459)."""
+        at that bound, blind plant seed 452 set 12)."""
         stated = (facts or {}).get("speed_filter")
         return (1.0 + self.FILTER_TOLERANCE) * float(stated) if stated else 0.0
 
