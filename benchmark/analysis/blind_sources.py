@@ -56,17 +56,17 @@ def stated_skew(settings: BlindSettings, d: dict, injected: float | None) -> flo
     return float(rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 2.0))
 
 
-#: Share of the sets whose speed channel has no filter where ``meta.yaml`` still states one (an
-#: instrument documented with a filter that the record's channel does not show): the
-#: tachometer's filter is searched there and must not earn a name.
+#: Share of the sets without a tachometer effect whose speed channel has a filter of its own,
+#: stated in ``meta.yaml`` as an injected one is (a tachogenerator's RC filter is common on a
+#: healthy bench): a statement then says nothing of the truth.
 STATED_FILTER_WITHOUT = 0.3
 
 
 def stated_filter(settings: BlindSettings, d: dict, injected: float | None) -> float | None:
-    """The speed filter (s) draw ``d``'s ``meta.yaml`` states (``speed_filter``): the injected
-    tachometer's (an RC filter's time constant, an encoder's gate time), else with probability
-    :data:`STATED_FILTER_WITHOUT` one of 1-5 ms the record does not carry, else none. Drawn from
-    the set's own stream (the other draws do not change)."""
+    """The speed filter (s) draw ``d``'s speed channel has and ``meta.yaml`` states
+    (``speed_filter``): the injected tachometer's (``injected``), else with probability
+    :data:`STATED_FILTER_WITHOUT` an RC filter of 1-5 ms of the channel's own, else none.
+    Drawn from the set's own stream (the other draws do not change)."""
     if injected:
         return float(injected)
     rng = np.random.default_rng([int(settings.seed), int(d["index"]), 8])
@@ -75,10 +75,38 @@ def stated_filter(settings: BlindSettings, d: dict, injected: float | None) -> f
     return float(rng.uniform(1e-3, 5e-3))
 
 
+def plant_speed_filter(spec: dict) -> float | None:
+    """The filter (s) the plant's tachometer effect puts on the speed (:mod:`synthetic.independent.sensor_effects`),
+    as ``meta.yaml`` states it: an RC filter's time constant, half an encoder's gate time."""
+    tach = next((e for e in spec["effects"] if e["name"] == "speed_sensor_gain"), {})
+    if tach.get("time_constant"):
+        return float(tach["time_constant"])
+    return 0.5 * float(tach["gate_time"]) if tach.get("gate_time") else None
+
+
 def state_filter(folder: Path, tau: float | None) -> None:
     """Write ``speed_filter`` (s) into ``folder/meta.yaml`` (nothing when ``tau`` is None)."""
     if tau is not None:
         _set_meta(folder, "speed_filter", float(tau))
+
+
+def filter_speed_columns(folder: Path, tau: float) -> None:
+    """Pass the ``speed`` column of every record of ``folder`` (``startup*.csv``, ``stop*.csv``)
+    through an RC filter of time constant ``tau`` (s), the bilinear transform at each record's
+    sampling, settled at its first value: a speed channel behind a filter, for a simulator
+    whose sensors have none."""
+    import pandas as pd
+    from scipy import signal
+
+    for path in sorted(Path(folder).glob("st*.csv")):
+        table = pd.read_csv(path)
+        if "speed" not in table or len(table) < 2:
+            continue
+        dt = float(np.median(np.diff(table["t"].to_numpy())))
+        b, a = signal.bilinear([1.0], [tau, 1.0], fs=1.0 / dt)
+        w = table["speed"].to_numpy(float)
+        table["speed"] = signal.lfilter(b, a, w, zi=signal.lfilter_zi(b, a) * w[0])[0]
+        table.to_csv(path, index=False, float_format="%.12g")
 
 
 def card_sequence(skew: dict, kind: str) -> dict:
@@ -127,12 +155,10 @@ def own_source(settings: BlindSettings):
             sign = -1.0 if d["form"].get("channel_delay", {}).get("lag", lag) == "voltage" else 1.0
             injected = sign * d["size"]["channel_delay"]
         d["channel_skew"] = stated_skew(settings, d, injected)
-        d["speed_filter"] = stated_filter(settings, d, None)  # the own plant's tachometer has no filter
 
     def make(d, folder):
         generate(generator_config(settings, d), folder)
         state_skew(folder, d.get("channel_skew"))
-        state_filter(folder, d.get("speed_filter"))
 
     return draws, make
 
@@ -167,8 +193,12 @@ def plant_source(settings: BlindSettings):
         if skew is not None and skew["form"] == "mux_skew":
             injected = card_sequence(skew, kind)
         d["channel_skew"] = stated_skew(settings, d, injected)
-        tach = next((e for e in spec["effects"] if e["name"] == "speed_sensor_gain"), {})
-        d["speed_filter"] = stated_filter(settings, d, tach.get("time_constant") or tach.get("gate_time"))
+        d["speed_filter"] = None
+        if spec["sensors"].get("has_speed", True):
+            tau = plant_speed_filter(spec)
+            d["speed_filter"] = stated_filter(settings, d, tau)
+            if tau is None and "speed_sensor_gain" not in chosen and d["speed_filter"] is not None:
+                spec["sensors"]["speed_lag"] = d["speed_filter"]  # the plant's own RC filter on a healthy channel
         draws.append(d)
 
     def make(d, folder):
@@ -277,13 +307,15 @@ def motulator_source(settings: BlindSettings):
         noise["current_colored_std"] *= current_scale
         draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
                       "motor_name": name, "noise": noise, "seed": seed})
-        draws[-1]["speed_filter"] = stated_filter(settings, draws[-1], None)  # motulator's speed is unfiltered
+        draws[-1]["speed_filter"] = stated_filter(settings, draws[-1], None)  # on motulator's unfiltered speed
 
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
                                settings.duration, settings.sample_rate, settings.motulator_stop)
         blind_description(Path(folder), f"motulator simulation: {d['scenario']} start")
-        state_filter(Path(folder), d.get("speed_filter"))
+        if d.get("speed_filter"):
+            filter_speed_columns(Path(folder), d["speed_filter"])
+            state_filter(Path(folder), d["speed_filter"])
 
     return draws, make
 

@@ -462,28 +462,39 @@ def test_pooled_draws_are_scored_as_one_set_of_rows(tmp_path, capsys):
         blind_pool.main([str(tmp_path)])
 
 
-def test_a_blind_set_states_its_tachometers_filter_and_some_sets_one_they_do_not_carry():
+def test_a_blind_set_states_its_speed_filter_and_healthy_channels_carry_one_too(tmp_path):
     """``speed_filter`` (meta.yaml) is a fact of the instrument: a plant set whose tachometer
-    has a filter or a gate time states it; of the others about :data:`STATED_FILTER_WITHOUT`
-    state one their channel does not carry (so that a stated filter says nothing of the truth),
-    drawn from the set's own stream (the rest of the draw is the one made before)."""
+    effect has a filter states its time constant, an encoder's half its gate time; of the sets
+    without a tachometer effect about :data:`STATED_FILTER_WITHOUT` have an RC filter of the
+    plant's own on their speed, stated the same way (so that a statement says nothing of the
+    truth); motulator's filtered speed is the bilinear RC filter of the simulated one."""
     from pathlib import Path
 
+    import pandas as pd
     from hydra import compose, initialize_config_dir
+    from scipy import signal
 
     from benchmark.analysis.blind import BlindSettings
-    from benchmark.analysis.blind_sources import SOURCES, STATED_FILTER_WITHOUT
+    from benchmark.analysis.blind_sources import SOURCES, STATED_FILTER_WITHOUT, filter_speed_columns
 
     conf = str(Path(__file__).resolve().parents[2] / "conf")
     with initialize_config_dir(version_base="1.3", config_dir=conf):
         s = BlindSettings.from_run(compose("blind", overrides=["source=plant", "n=60", "seed=5", "forms=heldout",
                                                                "only_effects=[speed_sensor_gain,two_mass]"]))
     draws, _ = SOURCES["plant"](s)
-    with_tach = [d for d in draws if "speed_sensor_gain" in d["effects"]]
-    assert with_tach and all(
-        d["speed_filter"] == next(e["gate_time"] for e in d["spec"]["effects"] if e["name"] == "speed_sensor_gain")
-        for d in with_tach)
-    without = [d["speed_filter"] for d in draws if "speed_sensor_gain" not in d["effects"]]
-    stated = [v for v in without if v is not None]
-    assert all(1e-3 <= v <= 5e-3 for v in stated)
-    assert abs(len(stated) / len(without) - STATED_FILTER_WITHOUT) < 0.2, (len(stated), len(without))
+    tach = [d for d in draws if "speed_sensor_gain" in d["effects"] and d["spec"]["sensors"]["has_speed"]]
+    gates = [next(e["gate_time"] for e in d["spec"]["effects"] if e["name"] == "speed_sensor_gain") for d in tach]
+    assert tach and all(d["speed_filter"] == 0.5 * g for d, g in zip(tach, gates, strict=True))
+    healthy = [d for d in draws if "speed_sensor_gain" not in d["effects"] and d["spec"]["sensors"]["has_speed"]]
+    stated = [d for d in healthy if d["speed_filter"] is not None]
+    assert all(1e-3 <= d["speed_filter"] <= 5e-3 and d["spec"]["sensors"]["speed_lag"] == d["speed_filter"]
+               for d in stated)
+    assert all("speed_lag" not in d["spec"]["sensors"] for d in healthy if d["speed_filter"] is None)
+    assert abs(len(stated) / len(healthy) - STATED_FILTER_WITHOUT) < 0.2, (len(stated), len(healthy))
+
+    t = np.arange(2000) * 1e-4
+    pd.DataFrame({"t": t, "i_r": np.sin(t), "speed": 100.0 * t}).to_csv(tmp_path / "startup.csv", index=False)
+    filter_speed_columns(tmp_path, 3e-3)
+    out = pd.read_csv(tmp_path / "startup.csv")
+    assert out["i_r"].to_numpy() == pytest.approx(np.sin(t), abs=1e-11)
+    assert out["speed"].iloc[-1] == pytest.approx(100.0 * t[-1] - 100.0 * 3e-3, rel=1e-6)

@@ -18,13 +18,13 @@ units and realistic ranges (the YAML defaults in ``conf/effect/``):
     and ``cs_sharpness`` ``n`` (about 2.5 matches ``tanh``, 8-15 a knee, 30+ a clip).
 ``speed_sensor_gain``
     Tachometer ``(1 + g) w + w_0`` (the plant), fitted as ``(1 + g + a sin(theta) + b cos(theta))
-    F(w) + w_0`` with a ripple once per revolution of the shaft angle ``theta`` (real tachometers
-    have one) and ``F`` a first-order filter of time constant ``tau`` (a tachogenerator's RC
-    filter that smooths its commutator ripple, an encoder's speed averaged over its gate time:
-    0-10 ms). Size: ``|g|``, 0.01-0.05; forms: ``sign`` of ``g``, ``offset`` ``w_0`` as a
-    fraction of synchronous speed (within +-0.005). Extras ``tach_gain_error`` (fraction),
-    ``tach_offset`` (fraction of synchronous speed), ``tach_ripple_sin``, ``tach_ripple_cos``,
-    ``tach_lag`` (s). Excluded when the record has no speed channel.
+    w + w_0`` with a ripple once per revolution of the shaft angle ``theta`` (real tachometers
+    have one). Its output filter is a fact of the instrument, not fitted: every model reads its
+    speed through the filter ``meta.yaml`` states (``speed_filter``,
+    :mod:`~benchmark.problems.timedomain.speed_filter`). Size: ``|g|``, 0.01-0.05; forms:
+    ``sign`` of ``g``, ``offset`` ``w_0`` as a fraction of synchronous speed (within +-0.005).
+    Extras ``tach_gain_error`` (fraction), ``tach_offset`` (fraction of synchronous speed),
+    ``tach_ripple_sin``, ``tach_ripple_cos``. Excluded when the record has no speed channel.
 ``two_mass``
     Motor and load inertias coupled by a torsional spring and damper, speed sensed on the load
     side. Size: the resonance ``sqrt(k (1/J_m + 1/J_l))/2 pi``, 30-200 Hz; forms
@@ -46,7 +46,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import signal
 
 from benchmark.core.effects import Effect
 from benchmark.problems.timedomain.channel_timing import current_lags, delay_phase_currents, fractional_delay
@@ -144,38 +143,18 @@ class CurrentSensorSaturation(Effect):
 
 
 # ----------------------------------------------------------------------------- tachometer
-def first_order_lag(w: np.ndarray, tau: np.ndarray, dt: float) -> np.ndarray:
-    """Rows of ``w`` (n, N) through first-order filters of time constants ``tau`` (n,) s, sampled
-    every ``dt`` s, each starting settled at its first value; a row with ``tau = 0`` passes
-    unchanged. Exact for an input linear between samples (ramp-invariant: the simulated speed is
-    continuous), and so linear in ``tau`` for ``tau`` far below ``dt`` (``w - tau dw/dt``): a fit
-    from no filter has a gradient (the step-invariant form has none there, its pole underflowing)."""
-    out = np.array(w, float, copy=True)
-    for k, tk in enumerate(np.ravel(tau)):
-        if tk > 0.0:
-            r = tk / dt
-            a = math.exp(-1.0 / r)
-            b = [1.0 - r * (1.0 - a), r * (1.0 - a) - a]
-            out[k] = signal.lfilter(b, [1.0, -a], out[k], zi=signal.lfilter_zi(b, [1.0, -a]) * out[k, 0])[0]
-    return out
-
-
 class SpeedSensorGain(Effect):
     name = "speed_sensor_gain"
     size_name = "gain_error"
     realistic = (0.01, 0.05)
-    extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos", "tach_lag")
+    extra_names = ("tach_gain_error", "tach_offset", "tach_ripple_sin", "tach_ripple_cos")
     #: Gain and offset only: the ripple once per revolution came with d666695 (two_mass and
-    #: sensor_offset had chased a plant tachometer's ripple), the output filter with 94d0a4a
-    #: (held-out ``tacho_filter``, plant seed 402 set 29, 14.6 times the noise left).
-    FIRST_FORM = {"tach_ripple_sin": 0.0, "tach_ripple_cos": 0.0, "tach_lag": 0.0}
-    extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed", "s")
-    physics = "tachometer gain error, offset, ripple at the rotation frequency and output filter"
-    #: Relative tolerance of a stated filter (:meth:`longest_lag`): an RC filter's components, a gate time's
-    #: equivalent first-order lag (about half of it, within the stated value).
-    FILTER_TOLERANCE = 0.25
-    #: ... and the shortest one that is there for a reason (s): 1 ms.
-    SHORTEST_LAG = 1e-3
+    #: sensor_offset had chased a plant tachometer's ripple). Its output filter is not an error
+    #: of the tachometer but a fact of the instrument, read by every model where ``meta.yaml``
+    #: states it (:mod:`~benchmark.problems.timedomain.speed_filter`).
+    FIRST_FORM = {"tach_ripple_sin": 0.0, "tach_ripple_cos": 0.0}
+    extra_units = ("p.u. of true speed", "p.u. of w_sync", "p.u. of true speed", "p.u. of true speed")
+    physics = "tachometer gain error, offset and ripple at the rotation frequency"
     shows_in = "steady speed off synchronous-minus-slip; a constant ratio in the speed residual"
     measure_stage = 3
     FORM_DRAWS = {"sign": {"choice": [-1.0, 1.0]}, "offset": [-0.005, 0.005]}
@@ -185,7 +164,7 @@ class SpeedSensorGain(Effect):
 
     def plant_extras(self, size, ctx, form=None):
         form = {**self.form, **(form or {})}
-        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0)), 0.0, 0.0, 0.0])
+        return np.array([float(form.get("sign", 1.0)) * float(size), float(form.get("offset", 0.0)), 0.0, 0.0])
 
     #: The largest offset of a tachometer (p.u. of synchronous speed) where the record does not
     #: say what it reads at rest.
@@ -201,34 +180,24 @@ class SpeedSensorGain(Effect):
             return -self.MAX_OFFSET, self.MAX_OFFSET
         return (rest["mean"] - rest["band"]) / ctx.w_sync, (rest["mean"] + rest["band"]) / ctx.w_sync
 
-    def longest_lag(self, facts) -> float:
-        """The longest output filter (s) the fits may give the tachometer: what ``meta.yaml``
-        states (``speed_filter``) with :data:`FILTER_TOLERANCE`, else 0 (no filter). The filter
-        (a tachogenerator's RC filter, an encoder's gate time: milliseconds) is a fact of the
-        instrument, as a card's channel skew is: searched up to 10 ms on every record, it took
-        what a foreign form left in the speed (a slip clutch read as a tachometer with its lag
-        at that bound, blind plant seed 452 set 12)."""
-        stated = (facts or {}).get("speed_filter")
-        return (1.0 + self.FILTER_TOLERANCE) * float(stated) if stated else 0.0
-
     def extra_bounds(self, ctx):
         lo, hi = self._offset_range(ctx)
-        return np.array([-0.1, lo, -0.05, -0.05, 0.0]), np.array([0.1, hi, 0.05, 0.05, self.longest_lag(ctx.facts)])
+        return np.array([-0.1, lo, -0.05, -0.05]), np.array([0.1, hi, 0.05, 0.05])
 
     def extra_starts(self, ctx):
         lo, hi = self._offset_range(ctx)
-        return [np.array([0.0, min(max(0.0, lo), hi), 0.0, 0.0, 0.0])]
+        return [np.array([0.0, min(max(0.0, lo), hi), 0.0, 0.0])]
 
     def measure(self, sim, extras, ctx):
-        """``(1 + g + a sin(theta) + b cos(theta)) F(w) + offset w_sync``: gain, offset, a ripple
-        once per revolution (an eccentric or unbalanced tachometer) and the output filter ``F``
-        (:func:`first_order_lag`), ``theta`` the shaft angle from the start of the record (the
-        unknown initial angle is in ``a``, ``b``: the ripple is linear in both, so a fit from
-        zero is not stuck at a phase)."""
+        """``(1 + g + a sin(theta) + b cos(theta)) w + offset w_sync``: gain, offset and a ripple
+        once per revolution (an eccentric or unbalanced tachometer), ``theta`` the shaft angle
+        from the start of the record (the unknown initial angle is in ``a``, ``b``: the ripple
+        is linear in both, so a fit from zero is not stuck at a phase). A filter the instrument
+        has comes after (:mod:`~benchmark.problems.timedomain.speed_filter`)."""
         extras = np.atleast_2d(extras)
         out = sim.copy()
         theta = np.cumsum(np.nan_to_num(sim[:, 2]), axis=1) * (ctx.sample_time or 1.0)
-        w = first_order_lag(sim[:, 2], extras[:, 4], ctx.sample_time or 1.0)
+        w = sim[:, 2]
         ripple = extras[:, 2:3] * np.sin(theta) + extras[:, 3:4] * np.cos(theta)
         out[:, 2] = w * (1.0 + extras[:, 0:1] + ripple) + extras[:, 1:2] * ctx.w_sync
         return out
@@ -241,7 +210,6 @@ class SpeedSensorGain(Effect):
         extras = np.atleast_2d(extras)
         dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
         theta = np.cumsum(np.nan_to_num(w), axis=1) * dt
-        w = first_order_lag(w, extras[:, 4], dt) if dt > 0 else w
         base = w * (1.0 + extras[:, 0:1]) + extras[:, 1:2] * ctx.w_sync
         sw, cw = w * np.sin(theta), w * np.cos(theta)
         with np.errstate(all="ignore"):
@@ -265,16 +233,14 @@ class SpeedSensorGain(Effect):
 
     def fitted_size(self, extras, ctx):
         """The largest of the tachometer's errors as a fraction of the speed: gain error, offset
-        (of synchronous speed), ripple and the filter (its time constant over the shortest real
-        one, :data:`SHORTEST_LAG`, counted as the smallest realistic gain error)."""
+        (of synchronous speed) and ripple."""
         x = np.ravel(extras)
-        lag = x[4] / self.SHORTEST_LAG * self.realistic[0] if len(x) > 4 else 0.0
-        return float(max(abs(x[0]), abs(x[1]), math.hypot(x[2], x[3]), lag))
+        return float(max(abs(x[0]), abs(x[1]), math.hypot(x[2], x[3])))
 
     def describe_fit(self, extras, ctx, base=None):
         x = np.ravel(extras)
         return {"gain": float(1.0 + x[0]), "offset_rad_s": float(x[1] * ctx.w_sync),
-                "ripple_per_revolution": float(np.hypot(x[2], x[3])), "lag_s": float(x[4])}
+                "ripple_per_revolution": float(np.hypot(x[2], x[3]))}
 
 
 # ----------------------------------------------------------------------------- shaft

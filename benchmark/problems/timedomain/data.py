@@ -137,10 +137,11 @@ class StartupDataset:
         (a mapping of phase channels to samples, :mod:`~benchmark.problems.timedomain.channel_timing`;
         its voltage skews are undone on reading), or None (channels sampled at once, or not
         stated): ``channel_delay`` is a candidate only where it is stated.
-    speed_filter : the longest time constant of the speed channel's filtering, s (a
-        tachogenerator's RC filter, or an encoder's gate time, over which it averages), as the
-        instrument's data sheet or the drive's setting gives it, or None (not stated: the speed
-        is read unfiltered): the tachometer's output filter is searched up to it only.
+    speed_filter : the time constant of the speed channel's filter, s (a tachogenerator's RC
+        filter; half an encoder's gate time, over which it averages), as the instrument's data
+        sheet or the drive's setting gives it, or None (not stated: the speed is read
+        unfiltered). The diagnosis's models read their speed through it
+        (:mod:`~benchmark.problems.timedomain.speed_filter`).
     conditioning : what the conditioning on load did (plain-English lines for report.md).
     conditioning_removed : the effects it found and removed (``sensor_offset``,
         ``current_sensor_saturation``): the diagnosis checks each by its rule and lists those kept.

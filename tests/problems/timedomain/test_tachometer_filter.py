@@ -1,4 +1,4 @@
-"""A tachometer behind an output filter (the catalogue's ``speed_sensor_gain``, ``tach_lag``).
+"""A tachometer behind an output filter (``speed_sensor_gain`` read through meta.yaml's ``speed_filter``).
 
 Independent plant, blind set 29 of ``python -m benchmark.blind source=plant forms=heldout
 seed=402`` (remade from its truth file): a 7.5 kW 6-pole six-step start whose tachometer reads
@@ -10,9 +10,11 @@ the filter's time constant among its parameters (0-10 ms: an RC filter on a tach
 an encoder's gate time), the gain alone explains the record. The plant's form is retired from
 its held-out forms since (an encoder's gate-time mean is held out in its place).
 
-The filter is a fact of the instrument: ``meta.yaml`` states it (``speed_filter``, as the blind
-draws state an injected one) and the fit searches it up to that; where nothing is stated it is
-held at none, and the same record is then not explained by the tachometer alone.
+Since 2026-12-07 the filter is a fact of the instrument, not a fitted error: ``meta.yaml``
+states it (``speed_filter``, as the blind draws state an injected one) and every model reads its
+speed through it; where nothing is stated the speed is read unfiltered, and the same record is
+then not explained by the tachometer alone (searched freely, the filter had taken what other
+forms left in the speed).
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ seed: 1085214444
 
 
 @pytest.mark.slow
-def test_a_filtered_tachometer_is_explained_by_its_gain_and_lag(tmp_path):
+def test_a_filtered_tachometer_is_explained_by_its_gain_through_the_stated_filter(tmp_path):
     _, folder = remade_blind_set(TACHOMETER_FILTER, tmp_path / "set")
     state_filter(folder, TACHOMETER_FILTER["effects"][0]["time_constant"])
     doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain", "two_mass", "load_torque"])
@@ -52,20 +54,21 @@ def test_a_filtered_tachometer_is_explained_by_its_gain_and_lag(tmp_path):
     assert doc["status"] == "explained"
     assert doc["gap_before"]["heldout_rms_over_noise"] > 50.0
     assert doc["gap_after"]["heldout_rms_over_noise"] < doc["gap_after"]["noise_band"][1]
-    fitted = doc["per_effect"][0]["parameters"]
-    lag, gain = fitted["tach_lag"], fitted["tach_gain_error"]
-    assert lag["value"] == pytest.approx(0.0031687, abs=3 * lag["standard_error"] + 1e-4)
-    assert gain["value"] == pytest.approx(0.0370559, abs=3 * gain["standard_error"] + 2e-4)
+    assert doc["facts"]["speed_filter"] == TACHOMETER_FILTER["effects"][0]["time_constant"]
+    # 0.03658 fitted (standard error 7e-5) against the plant's 0.03706: the plant filters its
+    # speed step-invariant at the record's sampling, the model ramp-invariant (half a sample
+    # apart, 1.5 % of the 3.2 ms), a form difference; with the filter fitted too
+    # (0-10 ms, before 2026-12-07) the gain came within 2e-4. Within 2 % of the gain error,
+    # 0.07 % of the gain.
+    gain = doc["per_effect"][0]["parameters"]["tach_gain_error"]
+    assert gain["value"] == pytest.approx(0.0370559, rel=0.02)
 
 
 @pytest.mark.slow
-def test_an_unstated_filter_is_not_searched(tmp_path):
-    """The same record without ``speed_filter``: the tachometer's lag is held at none, and its
-    gain and offset alone leave the shaft's lag (``tau dw/dt``) in the speed."""
+def test_an_unstated_filter_leaves_the_shafts_lag_in_the_speed(tmp_path):
+    """The same record without ``speed_filter``: the speed is read unfiltered, and the
+    tachometer's gain and offset leave the shaft's lag (``tau dw/dt``) in the speed."""
     _, folder = remade_blind_set(TACHOMETER_FILTER, tmp_path / "set")
     doc = diagnose_with(folder, tmp_path / "out", ["speed_sensor_gain"])
     assert doc["facts"]["speed_filter"] is None
-    tach = [p for p in doc["per_effect"] if p["effect"] == "speed_sensor_gain"]
-    if tach:
-        assert tach[0]["parameters"]["tach_lag"]["value"] == 0.0
     assert doc["gap_after"]["heldout_rms_over_noise"] > 2.0 * doc["gap_after"]["noise_band"][1]

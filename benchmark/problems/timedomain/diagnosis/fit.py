@@ -33,6 +33,7 @@ from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_
 from benchmark.problems.timedomain.mechanical import fit_free_stop
 from benchmark.problems.timedomain.noise import record_noise, stop_noise
 from benchmark.problems.timedomain.simulation import hold_is_linear
+from benchmark.problems.timedomain.speed_filter import first_order_lag, stated_speed_filter
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
 DIVERGED = 1e6
@@ -234,6 +235,8 @@ class JointModel:
         self._rows_out = data.startup_channels()
         pairs = list(zip(self.effects, self.slices, strict=True))
         self._measure_order = sorted(pairs, key=lambda p: getattr(p[0], "measure_stage", 0))
+        #: The speed channel's filter (s) meta.yaml states, read by every model (0: none).
+        self.speed_filter = stated_speed_filter(ctx.facts)
 
     @property
     def effect_names(self) -> list[str]:
@@ -262,12 +265,16 @@ class JointModel:
 
     def outputs(self, X: np.ndarray, rows: np.ndarray, sim: np.ndarray) -> np.ndarray:
         """Model outputs in the residual layout (n, n_residuals) from the extended model's
-        outputs ``sim`` (n, 3, N) of ``rows = self.rows(X)``: the sensors' transforms, the stop."""
+        outputs ``sim`` (n, 3, N) of ``rows = self.rows(X)``: the sensors' transforms, the
+        instrument's speed filter, the stop."""
         d = self.data
         for eff, s in self._measure_order:
             measure = getattr(eff, "measure", None)
             if measure is not None:
                 sim = measure(sim, X[:, s], self.ctx)
+        if self.speed_filter > 0.0:
+            sim = np.array(sim, copy=True)  # a cached simulation stays as it is
+            sim[:, 2] = first_order_lag(sim[:, 2], self.speed_filter, self.ctx.sample_time or 1.0)
         out = np.empty((len(X), d.n_residuals))
         k = len(self._rows_out) * d.n_startup
         out[:, :k] = np.asarray(sim)[:, self._rows_out, :].reshape(len(X), -1)
@@ -295,6 +302,8 @@ class JointModel:
                             (len(d.stop_t),))
         for eff, s in self._measure_order:  # the same speed sensor records the stop
             stop = eff.measure_stop(stop, X[:, s], self.ctx, d.stop_t, d.stop_speed)
+        if self.speed_filter > 0.0 and len(d.stop_t) > 1:  # ... through the same filter
+            stop = first_order_lag(stop, self.speed_filter, float(np.median(np.diff(d.stop_t))))
         return stop
 
     def _context_key(self) -> tuple:
