@@ -61,7 +61,7 @@ HELDOUT = {
 #: name and in ``all``, in no random pool (development draws stay draw for draw; held-out
 #: draws take the second forms written in their place).
 RETIRED = {
-    "speed_sensor_gain": ("tacho_filter",),  # meta.yaml's speed_filter (the tachometer filter was tach_lag until 2026-12-07)
+    "speed_sensor_gain": ("tacho_filter",),  # a fact in meta.yaml now (speed_filter); tach_lag before
     "two_mass": ("elastomer",),  # the catalogue's hardening coupling, tm_hardening
     "channel_delay": ("mux_skew",),  # a card's sequence in meta.yaml (channel_skew mapping), per-phase skews
     # the catalogue's DC machine's armature lag (the speed share's state); the brake's law (r_crit)
