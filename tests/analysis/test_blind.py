@@ -472,7 +472,6 @@ def test_a_blind_set_states_its_speed_filter_and_healthy_channels_carry_one_too(
 
     import pandas as pd
     from hydra import compose, initialize_config_dir
-    from scipy import signal
 
     from benchmark.analysis.blind import BlindSettings
     from benchmark.analysis.blind_sources import SOURCES, STATED_FILTER_WITHOUT, filter_speed_columns
