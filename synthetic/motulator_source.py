@@ -253,11 +253,19 @@ def _noise(rng: np.random.Generator, noise: dict, Ts: float, rec: dict) -> dict:
         out[ch] += float(noise.get("current_colored_std", 0.0)) * col
     for ch in ("v_r", "v_s", "v_t"):
         out[ch] = rec[ch] + float(noise.get("voltage_std", 0.0)) * rng.standard_normal(n)
-    out["speed"] = _speed_noise(rng, noise, rec["speed"])
+    out["speed"] = _speed_noise(rng, noise, rec["speed"], Ts)
     return out
 
 
-def _speed_noise(rng, noise: dict, speed: np.ndarray) -> np.ndarray:
+def _speed_noise(rng, noise: dict, speed: np.ndarray, dt: float) -> np.ndarray:
+    """The speed sensor: an RC filter of ``speed_filter`` s (none by default; bilinear at the
+    sampling ``dt``, settled at the first value), then white noise and quantisation."""
+    tau = float(noise.get("speed_filter", 0.0))
+    if tau > 0.0 and len(speed) > 1:
+        from scipy import signal
+
+        b, a = signal.bilinear([1.0], [tau, 1.0], fs=1.0 / dt)
+        speed = signal.lfilter(b, a, speed, zi=signal.lfilter_zi(b, a) * speed[0])[0]
     y = speed + float(noise.get("speed_std", 0.0)) * rng.standard_normal(len(speed))
     q = float(noise.get("speed_quantum", 0.0))
     return np.round(y / q) * q if q > 0 else y
@@ -322,7 +330,8 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
     noise : dict or None
         ``current_std`` (A, white), ``current_colored_std`` (A) with
         ``current_colored_bandwidth`` (Hz, first-order, default 50), ``voltage_std`` (V), ``speed_std``
-        (rad/s) and ``speed_quantum`` (rad/s); drawn from ``numpy.random.default_rng(seed)``.
+        (rad/s) and ``speed_quantum`` (rad/s); drawn from ``numpy.random.default_rng(seed)``;
+        ``speed_filter`` (s, default none): the speed sensor's RC filter, before the noise.
     seed : int
         Noise seed; the same inputs and seed give identical files.
     out : Path
@@ -412,7 +421,7 @@ def make_motulator_dataset(motor: dict, scenario: str, effects: dict | None, noi
             conv2, duty2 = mt["model"].VoltageSourceConverter(u_dc=0.0), np.ones((ns, 3))
         _simulate(mt, conv2, mach2, mech2, Tq, ns, duty2, pwm=False)
         ts = np.arange(ns) * Tq
-        speed = _speed_noise(rng, noise, _sample(ts, mech2.data.t, getattr(mech2.data, w_key)))
+        speed = _speed_noise(rng, noise, _sample(ts, mech2.data.t, getattr(mech2.data, w_key)), Tq)
         _write_csv(out / "stop.csv", {"t": ts, "speed": speed})
         stop_info = {"mode": stop_mode, "sample_time": Tq, "duration": float(ts[-1]), "initial_speed": w0}
 

@@ -90,25 +90,6 @@ def state_filter(folder: Path, tau: float | None) -> None:
         _set_meta(folder, "speed_filter", float(tau))
 
 
-def filter_speed_columns(folder: Path, tau: float) -> None:
-    """Pass the ``speed`` column of every record of ``folder`` (``startup*.csv``, ``stop*.csv``)
-    through an RC filter of time constant ``tau`` (s), the bilinear transform at each record's
-    sampling, settled at its first value: a speed channel behind a filter, for a simulator
-    whose sensors have none."""
-    import pandas as pd
-    from scipy import signal
-
-    for path in sorted(Path(folder).glob("st*.csv")):
-        table = pd.read_csv(path)
-        if "speed" not in table or len(table) < 2:
-            continue
-        dt = float(np.median(np.diff(table["t"].to_numpy())))
-        b, a = signal.bilinear([1.0], [tau, 1.0], fs=1.0 / dt)
-        w = table["speed"].to_numpy(float)
-        table["speed"] = signal.lfilter(b, a, w, zi=signal.lfilter_zi(b, a) * w[0])[0]
-        table.to_csv(path, index=False, float_format="%.12g")
-
-
 def card_sequence(skew: dict, kind: str) -> dict:
     """The ``channel_skew`` mapping a multiplexed card's documentation gives for the plant's
     ``mux_skew`` draw ``skew`` (its channels ``order`` converted ``size`` samples apart); an
@@ -307,15 +288,15 @@ def motulator_source(settings: BlindSettings):
         noise["current_colored_std"] *= current_scale
         draws.append({"index": i, "effects": chosen, "options": opts, "scenario": scenario, "motor": motor,
                       "motor_name": name, "noise": noise, "seed": seed})
-        draws[-1]["speed_filter"] = stated_filter(settings, draws[-1], None)  # on motulator's unfiltered speed
+        draws[-1]["speed_filter"] = stated_filter(settings, draws[-1], None)
+        if draws[-1]["speed_filter"]:  # motulator's speed sensor behind an RC filter, before its noise
+            noise["speed_filter"] = draws[-1]["speed_filter"]
 
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),
                                settings.duration, settings.sample_rate, settings.motulator_stop)
         blind_description(Path(folder), f"motulator simulation: {d['scenario']} start")
-        if d.get("speed_filter"):
-            filter_speed_columns(Path(folder), d["speed_filter"])
-            state_filter(Path(folder), d["speed_filter"])
+        state_filter(Path(folder), d.get("speed_filter"))
 
     return draws, make
 

@@ -467,14 +467,13 @@ def test_a_blind_set_states_its_speed_filter_and_healthy_channels_carry_one_too(
     effect has a filter states its time constant, an encoder's half its gate time; of the sets
     without a tachometer effect about :data:`STATED_FILTER_WITHOUT` have an RC filter of the
     plant's own on their speed, stated the same way (so that a statement says nothing of the
-    truth); motulator's filtered speed is the bilinear RC filter of the simulated one."""
+    truth); motulator's speed sensor gets the same RC filter, before its noise."""
     from pathlib import Path
 
-    import pandas as pd
     from hydra import compose, initialize_config_dir
 
     from benchmark.analysis.blind import BlindSettings
-    from benchmark.analysis.blind_sources import SOURCES, STATED_FILTER_WITHOUT, filter_speed_columns
+    from benchmark.analysis.blind_sources import SOURCES, STATED_FILTER_WITHOUT
 
     conf = str(Path(__file__).resolve().parents[2] / "conf")
     with initialize_config_dir(version_base="1.3", config_dir=conf):
@@ -491,9 +490,8 @@ def test_a_blind_set_states_its_speed_filter_and_healthy_channels_carry_one_too(
     assert all("speed_lag" not in d["spec"]["sensors"] for d in healthy if d["speed_filter"] is None)
     assert abs(len(stated) / len(healthy) - STATED_FILTER_WITHOUT) < 0.2, (len(stated), len(healthy))
 
-    t = np.arange(2000) * 1e-4
-    pd.DataFrame({"t": t, "i_r": np.sin(t), "speed": 100.0 * t}).to_csv(tmp_path / "startup.csv", index=False)
-    filter_speed_columns(tmp_path, 3e-3)
-    out = pd.read_csv(tmp_path / "startup.csv")
-    assert out["i_r"].to_numpy() == pytest.approx(np.sin(t), abs=1e-11)
-    assert out["speed"].iloc[-1] == pytest.approx(100.0 * t[-1] - 100.0 * 3e-3, rel=1e-6)
+    with initialize_config_dir(version_base="1.3", config_dir=conf):
+        m = BlindSettings.from_run(compose("blind", overrides=["source=motulator", "n=30", "seed=5"]))
+    mdraws, _ = SOURCES["motulator"](m)
+    assert all(d["noise"].get("speed_filter") == d["speed_filter"] for d in mdraws)
+    assert 0 < sum(d["speed_filter"] is not None for d in mdraws) < len(mdraws)

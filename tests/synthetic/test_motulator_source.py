@@ -193,3 +193,19 @@ def test_effects_and_refusals(motulator, tmp_path):
         ms.make_motulator_dataset(SMALL, "dol", {"iron_loss": {}}, None, 0, tmp_path, 0.01, 5000, False)
     with pytest.raises(ValueError, match="scenario"):
         ms.make_motulator_dataset(SMALL, "star_delta", None, None, 0, tmp_path, 0.01, 5000, False)
+
+
+def test_the_speed_sensor_filter_comes_before_the_noise():
+    """``noise["speed_filter"]``: an RC filter on the simulated speed (a ramp of ``a`` rad/s^2
+    reads ``tau a`` low once settled), then the white noise of ``speed_std`` unchanged; none by
+    default."""
+    from synthetic.motulator_source import _speed_noise
+
+    dt, acc, tau = 1e-4, 500.0, 3e-3
+    ramp = acc * dt * np.arange(4000)
+    clean = _speed_noise(np.random.default_rng(0), {}, ramp, dt)
+    np.testing.assert_array_equal(clean, ramp)
+    lagged = _speed_noise(np.random.default_rng(0), {"speed_filter": tau}, ramp, dt)
+    assert lagged[-1] == pytest.approx(ramp[-1] - tau * acc, rel=1e-6)
+    noisy = _speed_noise(np.random.default_rng(0), {"speed_filter": tau, "speed_std": 0.1}, ramp, dt)
+    assert np.std(noisy - lagged) == pytest.approx(0.1, rel=0.05)
