@@ -101,7 +101,8 @@ def test_bench_keys_of_meta_yaml(tmp_path):
         ds = load_startup_dataset(folder)
     assert ds.stator_dc_resistance == 0.74 and ds.winding_temperature == 21.5
     assert ds.facts() == {"dc_link_voltage": None, "input_hold": "linear", "supply_frequency": 50.0,
-                          "has_speed": True, "has_stop": False, "channel_skew": None, "nameplate": ds.nameplate}
+                          "has_speed": True, "has_stop": False, "channel_skew": None, "speed_filter": None,
+                          "nameplate": ds.nameplate}
     meta["nameplate"]["powr"] = 1.0
     (folder / "meta.yaml").write_text(yaml.safe_dump(meta))
     with pytest.raises(DataError, match=r"nameplate.powr' unknown \(found 'power'|nameplate.powr' unknown"):
