@@ -77,3 +77,25 @@ def check_meta_type(path: Path, key: str, value, kind):
         if float in kinds and int not in kinds:
             value = float(value)
     return value
+
+
+#: Keys of ``nameplate`` in meta.yaml: rated power (W), voltage (V line-line rms), current (A rms),
+#: speed (rpm), frequency (Hz).
+NAMEPLATE_KEYS = ("rated_power", "voltage", "current", "speed", "frequency")
+
+
+def parse_nameplate(meta_path: Path, value) -> dict:
+    """``nameplate`` of meta.yaml: a mapping of positive numbers with known keys."""
+    if not isinstance(value, dict):
+        raise DataError(meta_path, f"key 'nameplate' must be a mapping of {list(NAMEPLATE_KEYS)}, got "
+                                   f"{_short_repr(value)}")
+    out = {}
+    for k, v in value.items():
+        if k not in NAMEPLATE_KEYS:
+            raise DataError(meta_path, f"key 'nameplate.{k}' unknown{_did_you_mean(str(k), NAMEPLATE_KEYS)}; "
+                                       f"known: {list(NAMEPLATE_KEYS)}")
+        x = check_meta_type(meta_path, f"nameplate.{k}", v, float)
+        if not x > 0:
+            raise DataError(meta_path, f"key 'nameplate.{k}' must be > 0, got {x}")
+        out[k] = float(x)
+    return out

@@ -25,7 +25,7 @@ import numpy as np
 from benchmark.core.errors import DataError, DataWarning
 from benchmark.core.io import write_table_atomic, write_yaml_atomic
 from benchmark.core.matfiles import read_mat_table
-from benchmark.core.meta_file import check_meta_type, read_meta
+from benchmark.core.meta_file import check_meta_type, parse_nameplate, read_meta
 from benchmark.core.tables import _did_you_mean, _short_repr, check_time_column, read_table
 from benchmark.problems.timedomain.channel_timing import (
     CURRENT_CHANNELS,
@@ -35,6 +35,7 @@ from benchmark.problems.timedomain.channel_timing import (
 )
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
 from benchmark.problems.timedomain.load_checks import check_records
+from benchmark.problems.timedomain.speed_filter import parse_speed_filter
 from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C
 
 VOLTAGE_COLUMNS = (("v_alpha", "v_beta"), ("v_r", "v_s", "v_t"), ("v_rs", "v_st"))
@@ -50,13 +51,6 @@ SYNC_SPEED_MARGIN = 1.5
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
              "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
              "conditioning", "chord_voltage", "channel_skew", "speed_filter")
-#: The longest speed filter meta.yaml may state (s): a tachogenerator's RC filter or an
-#: encoder's gate time are milliseconds; a tenth of a second would be a filter on the
-#: dynamics the record is there to show.
-MAX_SPEED_FILTER = 0.1
-#: Keys of ``nameplate`` in meta.yaml: rated power (W), voltage (V line-line rms), current (A rms),
-#: speed (rpm), frequency (Hz).
-NAMEPLATE_KEYS = ("rated_power", "voltage", "current", "speed", "frequency")
 #: Optional start-up columns: ``speed`` (a record without a speed sensor has none) and ``torque``
 #: (N m, a measured shaft torque).
 OPTIONAL_COLUMNS = ("speed", "torque")
@@ -242,11 +236,11 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
             raise DataError(meta_path, f"key 'winding_temperature' must be in deg C ({lo:g} to {hi:g}), got {theta}")
         optional["winding_temperature"] = float(theta)
     if meta.get("nameplate") is not None:
-        optional["nameplate"] = _nameplate(meta_path, meta["nameplate"])
+        optional["nameplate"] = parse_nameplate(meta_path, meta["nameplate"])
     if meta.get("channel_skew") is not None:
         optional["channel_skew"] = parse_channel_skew(meta_path, meta["channel_skew"])
     if meta.get("speed_filter") is not None:
-        optional["speed_filter"] = _speed_filter(meta_path, meta["speed_filter"])
+        optional["speed_filter"] = parse_speed_filter(meta_path, meta["speed_filter"])
     chord = meta.get("chord_voltage", False)
     if not isinstance(chord, bool):
         raise DataError(meta_path, f"key 'chord_voltage' must be true or false, got {_short_repr(chord)}")
@@ -280,32 +274,6 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
 
         ds = condition_dataset(ds)
     return ds
-
-
-def _speed_filter(meta_path: Path, value) -> float:
-    """``speed_filter`` of meta.yaml: seconds, 0 to :data:`MAX_SPEED_FILTER`."""
-    tau = check_meta_type(meta_path, "speed_filter", value, float)
-    if not 0.0 <= tau <= MAX_SPEED_FILTER:
-        raise DataError(meta_path, f"key 'speed_filter' must be in seconds, 0 to {MAX_SPEED_FILTER:g} (the speed "
-                                   f"channel's filter time constant or gate time), got {_short_repr(value)}")
-    return float(tau)
-
-
-def _nameplate(meta_path: Path, value) -> dict:
-    """``nameplate`` of meta.yaml: a mapping of positive numbers with known keys."""
-    if not isinstance(value, dict):
-        raise DataError(meta_path, f"key 'nameplate' must be a mapping of {list(NAMEPLATE_KEYS)}, got "
-                                   f"{_short_repr(value)}")
-    out = {}
-    for k, v in value.items():
-        if k not in NAMEPLATE_KEYS:
-            raise DataError(meta_path, f"key 'nameplate.{k}' unknown{_did_you_mean(str(k), NAMEPLATE_KEYS)}; "
-                                       f"known: {list(NAMEPLATE_KEYS)}")
-        x = check_meta_type(meta_path, f"nameplate.{k}", v, float)
-        if not x > 0:
-            raise DataError(meta_path, f"key 'nameplate.{k}' must be > 0, got {x}")
-        out[k] = float(x)
-    return out
 
 
 def _record_files(folder: Path, prefix: str) -> list[Path]:

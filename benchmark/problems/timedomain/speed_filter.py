@@ -17,9 +17,29 @@ tachometer and a double cage where a filter was stated and free up to it, seed 4
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from scipy import signal
+
+from benchmark.core.errors import DataError
+from benchmark.core.meta_file import check_meta_type
+from benchmark.core.tables import _short_repr
+
+#: The longest speed filter meta.yaml may state (s): a tachogenerator's RC filter or an
+#: encoder's gate time are milliseconds; a tenth of a second would be a filter on the
+#: dynamics the record is there to show.
+MAX_SPEED_FILTER = 0.1
+
+
+def parse_speed_filter(meta_path: Path, value) -> float:
+    """``speed_filter`` of meta.yaml: seconds, 0 to :data:`MAX_SPEED_FILTER`."""
+    tau = check_meta_type(meta_path, "speed_filter", value, float)
+    if not 0.0 <= tau <= MAX_SPEED_FILTER:
+        raise DataError(meta_path, f"key 'speed_filter' must be in seconds, 0 to {MAX_SPEED_FILTER:g} (the speed "
+                                   f"channel's filter time constant, half an encoder's gate time), got "
+                                   f"{_short_repr(value)}")
+    return float(tau)
 
 
 def stated_speed_filter(facts: dict | None) -> float:
