@@ -123,3 +123,17 @@ def paper_motor():
 @pytest.fixture(scope="session")
 def paper_records():
     return run_startup_stop(PAPER_MOTOR, StartupStopTest())
+
+
+def with_meta_key(folder: Path, key: str, value):
+    """Set ``key`` of ``folder/meta.yaml`` to ``value`` (the other keys as they are) and load the
+    data set again (:func:`load_startup_dataset`)."""
+    import yaml
+
+    from benchmark.problems.timedomain.data import load_startup_dataset
+
+    meta = Path(folder) / "meta.yaml"
+    doc = yaml.safe_load(meta.read_text())
+    doc[key] = value
+    meta.write_text(yaml.safe_dump(doc))
+    return load_startup_dataset(folder)

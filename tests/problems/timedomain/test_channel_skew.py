@@ -7,14 +7,13 @@ import dataclasses
 
 import numpy as np
 import pytest
-import yaml
 
 from benchmark.core.effects import load_effects
 from benchmark.core.errors import DataError
 from benchmark.problems.timedomain.data import load_startup_dataset, write_startup_dataset
 from benchmark.problems.timedomain.diagnosis.pipeline import screen
 from synthetic.timedomain import make_dataset
-from tests.conftest import compose_config
+from tests.conftest import compose_config, with_meta_key
 
 
 @pytest.fixture(scope="module")
@@ -24,11 +23,7 @@ def folder(tmp_path_factory):
 
 
 def _with(folder, value):
-    meta = folder / "meta.yaml"
-    doc = yaml.safe_load(meta.read_text())
-    doc["channel_skew"] = value
-    meta.write_text(yaml.safe_dump(doc))
-    return load_startup_dataset(folder)
+    return with_meta_key(folder, "channel_skew", value)
 
 
 def test_a_stated_skew_is_read_checked_and_kept(folder, tmp_path):

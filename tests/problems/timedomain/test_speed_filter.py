@@ -8,7 +8,6 @@ import dataclasses
 
 import numpy as np
 import pytest
-import yaml
 
 from benchmark.core.effects import EffectContext, load_effects
 from benchmark.core.errors import DataError
@@ -16,7 +15,7 @@ from benchmark.problems.timedomain.data import load_startup_dataset, write_start
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
 from benchmark.problems.timedomain.speed_filter import first_order_lag
 from synthetic.timedomain import make_dataset
-from tests.conftest import compose_config
+from tests.conftest import compose_config, with_meta_key
 
 
 @pytest.fixture(scope="module")
@@ -26,11 +25,7 @@ def folder(tmp_path_factory):
 
 
 def _with(folder, value):
-    meta = folder / "meta.yaml"
-    doc = yaml.safe_load(meta.read_text())
-    doc["speed_filter"] = value
-    meta.write_text(yaml.safe_dump(doc))
-    return load_startup_dataset(folder)
+    return with_meta_key(folder, "speed_filter", value)
 
 
 def test_a_stated_filter_is_read_checked_and_kept(folder, tmp_path):
