@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
+from scipy import optimize, signal
 
 RHO_MAX = 0.97  #: AR(1) coefficients are clipped to +-RHO_MAX in plug-in formulas
 
@@ -206,7 +206,7 @@ def noise_from_periodic(x, fs: float, f0: float, n_harmonics: int = 10, *, trend
     return estimate_noise(e, p_eff, f"periodic fit ({f:.4f} Hz, {(len(om) - 1 - trend) // 2} harmonics)")
 
 
-def noise_from_smooth(x, window: int, polyorder: int = 2) -> NoiseEstimate:
+def noise_from_smooth(x, window: int, polyorder: int = 2, pole: float = 0.0) -> NoiseEstimate:
     """Noise of a slowly varying channel (a speed): residual from a Savitzky-Golay fit.
 
     The residual ``e = (I - H) x`` of white noise has variance ``sigma^2 (1 - h_0)``, ``h_0``
@@ -223,7 +223,14 @@ def noise_from_smooth(x, window: int, polyorder: int = 2) -> NoiseEstimate:
     else it leaks in and biases high); fine for quantisation and ripple-type noise; prefer
     :func:`noise_from_quiet` when a rest segment exists. ``rel_uncertainty`` covers the
     random error only (measured: 10 % conservative for white noise), not this bias.
+
+    Where the colour is known, ``pole`` > 0 (a sensor's first-order filter, ``exp(-dt/tau)``
+    per sample), the noise is taken as white noise plus noise coloured by that pole (a
+    tachogenerator's noise before its RC filter and an acquisition's after it), each of unknown
+    level: :func:`smooth_two_colour`.
     """
+    if pole > 0.0:
+        return smooth_two_colour(x, window, polyorder, pole)
     x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
     if window <= polyorder + 1 or len(x) < 3 * window:
         raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
@@ -235,6 +242,65 @@ def noise_from_smooth(x, window: int, polyorder: int = 2) -> NoiseEstimate:
     std = math.sqrt(float(e @ e) / (len(e) * (1.0 - h0)))
     return NoiseEstimate(std, 1.0 / math.sqrt(2 * n_eff), n_eff,
                          f"smooth (Savitzky-Golay window {window}, order {polyorder})")
+
+
+#: Simulated records of the fitted noise behind :func:`smooth_two_colour`'s uncertainty.
+TWO_COLOUR_REPLICATES = 32
+
+
+def _residual_autocovariance(window: int, polyorder: int, pole: float, lags: int) -> np.ndarray:
+    """(lags + 1, 2) the autocovariance at lags 0..``lags`` of the Savitzky-Golay residual of unit
+    white noise (column 0) and of unit-variance AR(1) noise of ``pole`` (column 1)."""
+    c = -signal.savgol_coeffs(window, polyorder)
+    c[window // 2] += 1.0
+    g = np.correlate(c, c, "full")  # the residual filter's own autocorrelation, lags -(W-1)..W-1
+    m = np.arange(-(window - 1), window)
+    d = np.abs(np.arange(lags + 1)[:, None] - m[None, :])
+    return np.column_stack([np.sum(g * (d == 0), axis=1), np.sum(g * pole ** d.astype(float), axis=1)])
+
+
+def _two_colour_levels(x: np.ndarray, window: int, polyorder: int, kernel: np.ndarray) -> np.ndarray:
+    """(white variance, coloured variance) fitted (non-negative least squares) to the
+    autocovariance of ``x``'s interior Savitzky-Golay residual at the lags of ``kernel``."""
+    half = window // 2
+    e = (x - signal.savgol_filter(x, window, polyorder, mode="interp"))[half:len(x) - half]
+    n = len(e)
+    gamma = np.array([np.dot(e[k:], e[:n - k]) / n for k in range(len(kernel))])
+    return optimize.nnls(kernel, gamma)[0]
+
+
+def smooth_two_colour(x, window: int, polyorder: int, pole: float) -> NoiseEstimate:
+    """Noise of a slowly varying channel whose noise is white noise plus noise coloured by a
+    known first-order ``pole`` (per sample), each of unknown level: both variances fitted to the
+    Savitzky-Golay residual's autocovariance over one window of lags (the two colours leave it
+    different shapes), the std that of their sum. A noise coloured below the smoothing's
+    cut-off is mostly taken for signal by :func:`noise_from_smooth` (measured: a 5 ms filter at
+    12 kHz, window 101: 0.37 of its std; 1 kHz, window 51: 0.78); this estimate came within 4 %
+    (mean of 20 records each, white, coloured and both). Its relative uncertainty is the spread
+    of the estimate over :data:`TWO_COLOUR_REPLICATES` simulated records of the fitted noise
+    (fixed seed), at least the white estimate's ``1 / sqrt(2 N_eff)``: the coloured level is read
+    through the small share of it the residual keeps."""
+    x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
+    if window <= polyorder + 1 or len(x) < 3 * window:
+        raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
+    if not 0.0 < pole < 1.0:
+        raise ValueError(f"pole must be in (0, 1), got {pole}")
+    kernel = _residual_autocovariance(window, polyorder, pole, window)
+    levels = _two_colour_levels(x, window, polyorder, kernel)
+    std = math.sqrt(float(levels.sum()))
+    white = noise_from_smooth(x, window, polyorder)
+    rng = np.random.default_rng(0)
+    sims = []
+    for _ in range(TWO_COLOUR_REPLICATES):
+        w = rng.standard_normal(len(x) + 1)
+        w[0] /= math.sqrt(1.0 - pole**2)
+        coloured = math.sqrt(1.0 - pole**2) * signal.lfilter([1.0], [1.0, -pole], w)[1:]
+        sim = math.sqrt(levels[0]) * rng.standard_normal(len(x)) + math.sqrt(levels[1]) * coloured
+        sims.append(math.sqrt(float(_two_colour_levels(sim, window, polyorder, kernel).sum())))
+    u = max(float(np.std(sims)) / max(std, 1e-300), white.rel_uncertainty) if std > 0 else white.rel_uncertainty
+    share = float(levels[1] / levels.sum()) if std > 0 else 0.0
+    return NoiseEstimate(std, u, 1.0 / (2.0 * u * u), f"smooth (Savitzky-Golay window {window}, order {polyorder}), "
+                                                      f"white and coloured by pole {pole:.4g} ({share:.0%} coloured)")
 
 
 def noise_std(x, fs=None, *, f0=None, n_harmonics: int = 10, window=None, polyorder: int = 2) -> NoiseEstimate:

@@ -354,22 +354,25 @@ def supply_frequency_of(t, v_alpha, v_beta) -> float:
     return abs(phasor_speed(np.asarray(v_alpha)[tail], np.asarray(v_beta)[tail], np.asarray(t)[tail])) / (2 * math.pi)
 
 
-def record_noise(record, supply_frequency: float | None = None) -> tuple[dict[str, NoiseEstimate], float]:
+def record_noise(record, supply_frequency: float | None = None,
+                 speed_filter: float | None = None) -> tuple[dict[str, NoiseEstimate], float]:
     """:func:`startup_noise` of a :class:`~benchmark.problems.timedomain.data.StartupRecord`
     (``speed`` left out when not measured) and the supply frequency it used (Hz): the one given
-    (meta.yaml's ``supply_frequency``), else :func:`supply_frequency_of` the voltages."""
+    (meta.yaml's ``supply_frequency``), else :func:`supply_frequency_of` the voltages;
+    ``speed_filter`` (s) is meta.yaml's, the speed channel's filter (:func:`filter_pole`)."""
     r = record
     speed = np.asarray(r.speed, float)
     has_speed = bool(np.all(np.isfinite(speed)))
     f_supply = float(supply_frequency or supply_frequency_of(r.t, r.v_alpha, r.v_beta))
     noise = startup_noise(r.t, r.v_alpha, r.v_beta, r.i_alpha, r.i_beta, speed if has_speed else None, f_supply,
-                          frequency_known=bool(supply_frequency))
+                          frequency_known=bool(supply_frequency), speed_filter=speed_filter)
     return noise, f_supply
 
 
 def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: float,
-                  frequency_known: bool = False) -> dict[str, NoiseEstimate]:
-    """Noise of ``i_alpha``, ``i_beta`` and (when measured) ``speed`` of one start-up record."""
+                  frequency_known: bool = False, speed_filter: float | None = None) -> dict[str, NoiseEstimate]:
+    """Noise of ``i_alpha``, ``i_beta`` and (when measured) ``speed`` of one start-up record
+    (``speed_filter``, s: the speed channel's stated filter, :func:`filter_pole`)."""
     n = len(t)
     fs = 1.0 / float(np.median(np.diff(t)))
     has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
@@ -413,14 +416,15 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
         floor = SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
         try:
             orders = supplied_torque_orders(v_alpha[k_ss:], v_beta[k_ss:], fs, f0)
-            out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0, orders), speed, floor)
+            pole = filter_pole(speed_filter, 1.0 / fs)
+            out["speed"] = floored(steady_speed_noise(speed[k_ss:], fs, f0, orders, pole), speed, floor)
         except ValueError as exc:
             out["speed"] = fallback(speed, floor, str(exc))
     return out
 
 
 def steady_speed_noise(x: np.ndarray, fs: float, f0: float,
-                       orders: str | Sequence[int] = "torque") -> NoiseEstimate:
+                       orders: str | Sequence[int] = "torque", pole: float = 0.0) -> NoiseEstimate:
     """Noise of the speed's steady state ``x`` (rad/s): the smaller of a Savitzky-Golay fit's
     residual (window up to 101 samples) and, over two supply periods or more, the drifting
     lines of the supply ``f0`` (Hz) at which the torque pulsates (:func:`torque_harmonic_orders`),
@@ -433,9 +437,10 @@ def steady_speed_noise(x: np.ndarray, fs: float, f0: float,
     every supply harmonic it was taken out wherever it fell beside one (a 6-pole motor's 18 per
     revolution at 357 Hz beside the 6th: 0.070 rad/s against 0.095 really added). ``orders``:
     the torque lines fitted, all of them (``"torque"``) or those the supply makes
-    (:func:`supplied_torque_orders`, as :func:`startup_noise` calls it)."""
+    (:func:`supplied_torque_orders`, as :func:`startup_noise` calls it). ``pole``: the colour of
+    the speed's stated filter (:func:`filter_pole`), allowed for in the smoothing's residual."""
     window = int(min(101, len(x) // 3)) | 1
-    est = noise_from_smooth(x, window)
+    est = noise_from_smooth(x, window, pole=pole)
     if len(x) / fs * f0 >= 2:
         try:
             periodic = noise_from_modulated_periodic(x, fs, f0, harmonics=orders)
@@ -446,15 +451,27 @@ def steady_speed_noise(x: np.ndarray, fs: float, f0: float,
     return est
 
 
-def stop_noise(speed: np.ndarray, w0: float) -> NoiseEstimate:
+def stop_noise(speed: np.ndarray, w0: float, pole: float = 0.0) -> NoiseEstimate:
     """Noise of a stop record's free motion ``speed`` (rad/s, from the speed ``w0``): a smooth
-    fit's residual, floored as the start-up's channels."""
+    fit's residual (``pole``: the colour of a stated filter, :func:`filter_pole`), floored as the
+    start-up's channels."""
     floor = SPEED_NOISE_FREE_FLOOR * max(w0, 1e-9)
     window = int(min(51, len(speed) // 3)) | 1
     try:
-        return floored(noise_from_smooth(speed, window), speed, floor)
+        return floored(noise_from_smooth(speed, window, pole=pole), speed, floor)
     except ValueError as exc:
         return fallback(speed, floor, str(exc))
+
+
+def filter_pole(speed_filter: float | None, dt: float) -> float:
+    """The per-sample pole ``exp(-dt / tau)`` that the speed channel's stated filter (``tau`` =
+    ``speed_filter``, s; 0 or None: none) gives noise entering before it, at the sample time
+    ``dt`` (s); 0 when there is none. A tachogenerator's own noise (brushes, commutation) passes
+    its RC filter: the recorded noise is then coloured, mostly slower than a smoothing window,
+    which took it for signal and put an effect-free record's gap at 1.5 (motulator, a 5 ms
+    filter: 0.018 rad/s estimated where 0.044 was recorded)."""
+    tau = float(speed_filter or 0.0)
+    return math.exp(-dt / tau) if tau > 0.0 and dt > 0.0 else 0.0
 
 
 def combined(noise: dict[str, NoiseEstimate], counts: dict[str, int]) -> NoiseEstimate:

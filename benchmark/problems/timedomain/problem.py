@@ -166,7 +166,8 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
         quantised channels at least ``q / sqrt(12)``; coloured noise and the estimate's own
         uncertainty allowed for)."""
         if self._noise is None:
-            per_record = [record_noise(r, self.dataset.supply_frequency)[0] for r in self.dataset.startups]
+            ds = self.dataset
+            per_record = [record_noise(r, ds.supply_frequency, ds.speed_filter)[0] for r in ds.startups]
             self._noise = [[noise.get(c) for c in WEIGHT_KEYS] for noise in per_record]
         return self._noise
 
