@@ -37,6 +37,7 @@ and ``dc_generator``, a DC generator with its armature circuit as an extra state
 from __future__ import annotations
 
 import importlib.metadata
+import math
 from pathlib import Path
 
 import numpy as np
@@ -258,9 +259,15 @@ def _noise(rng: np.random.Generator, noise: dict, Ts: float, rec: dict) -> dict:
 
 
 def _speed_noise(rng, noise: dict, speed: np.ndarray, dt: float) -> np.ndarray:
-    """The speed sensor: an RC filter of ``speed_filter`` s (none by default; bilinear at the
-    sampling ``dt``, settled at the first value), then white noise and quantisation."""
+    """The speed sensor: its own noise (a tachogenerator's brushes and commutation; none by
+    default) through an RC filter of ``speed_filter`` s (none by default; bilinear at the sampling
+    ``dt``, settled at the first value) that colours it, ``speed_coloured_std`` rad/s as it leaves
+    the filter at any sampling, then the acquisition's white noise ``speed_std`` and quantisation."""
     tau = float(noise.get("speed_filter", 0.0))
+    coloured = float(noise.get("speed_coloured_std", 0.0))
+    if coloured > 0.0:  # white at the sensor, of the std that leaves ``coloured`` behind the filter
+        pole = (2.0 * tau - dt) / (2.0 * tau + dt) if tau > 0.0 else -1.0  # the bilinear filter's
+        speed = speed + coloured / math.sqrt(0.5 * (1.0 - pole)) * rng.standard_normal(len(speed))
     if tau > 0.0 and len(speed) > 1:
         from scipy import signal
 
