@@ -265,14 +265,17 @@ def _speed_noise(rng, noise: dict, speed: np.ndarray, dt: float) -> np.ndarray:
     the filter at any sampling, then the acquisition's white noise ``speed_std`` and quantisation."""
     tau = float(noise.get("speed_filter", 0.0))
     coloured = float(noise.get("speed_coloured_std", 0.0))
-    if coloured > 0.0:  # white at the sensor, of the std that leaves ``coloured`` behind the filter
-        pole = (2.0 * tau - dt) / (2.0 * tau + dt) if tau > 0.0 else -1.0  # the bilinear filter's
-        speed = speed + coloured / math.sqrt(0.5 * (1.0 - pole)) * rng.standard_normal(len(speed))
     if tau > 0.0 and len(speed) > 1:
         from scipy import signal
 
         b, a = signal.bilinear([1.0], [tau, 1.0], fs=1.0 / dt)
-        speed = signal.lfilter(b, a, speed, zi=signal.lfilter_zi(b, a) * speed[0])[0]
+        zi = signal.lfilter_zi(b, a)
+        speed = signal.lfilter(b, a, speed, zi=zi * speed[0])[0]
+        if coloured > 0.0:  # white at the sensor, of the std that leaves ``coloured`` behind the filter
+            white = coloured / math.sqrt(0.5 * (1.0 + a[1])) * rng.standard_normal(len(speed))
+            speed = speed + signal.lfilter(b, a, white, zi=zi * coloured * rng.standard_normal())[0]  # stationary
+    elif coloured > 0.0:  # no filter: the sensor's noise is white
+        speed = speed + coloured * rng.standard_normal(len(speed))
     y = speed + float(noise.get("speed_std", 0.0)) * rng.standard_normal(len(speed))
     q = float(noise.get("speed_quantum", 0.0))
     return np.round(y / q) * q if q > 0 else y
