@@ -39,6 +39,7 @@ from benchmark.problems.timedomain.motor import PARAMETER_NAMES, PARAMETER_UNITS
 from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
+from benchmark.problems.timedomain.speed_filter import speed_read_through
 from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
 
@@ -124,6 +125,7 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
         self.loaded_dataset: StartupDataset | None = None
         self._init_prior(prior_spread)
         self._init_switch_on_flux()
+        self.speed_lag = float(dataset.speed_filter or 0.0)  # s: the speed channel's stated filter
 
     # -- parameter vectors -------------------------------------------------------------
     def full_parameters(self, X: np.ndarray) -> np.ndarray:
@@ -148,6 +150,9 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
 
     # -- cost ------------------------------------------------------------------------
     def evaluate(self, X: np.ndarray) -> np.ndarray:
+        if self.speed_lag > 0.0:  # a stated speed filter: the cost of the filtered outputs (the compiled
+            costs = np.array([self.cost_from_residuals(r) for r in self.residuals_batch(X)])  # cost reads it raw)
+            return np.where(np.isfinite(costs), costs, np.inf)
         coef = coefficients(self.full_parameters(X), self.dataset.pole_pairs)
         total = np.zeros(len(coef))
         for (v_a, v_b, i_a, i_b, w), used in zip(self._records, self._current_used, strict=True):
@@ -208,8 +213,10 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
         out = []
         for noise, rec, (v_a, v_b, *_) in zip(levels, self.dataset.startups, self._records, strict=True):
             def simulate(va, vb, noise=noise):
-                y = startup_outputs_batch(coef, np.ascontiguousarray(va), np.ascontiguousarray(vb), True,
-                                          self.dataset.sample_time, float(self.dataset.pole_pairs))[0]
+                y = speed_read_through(startup_outputs_batch(coef, np.ascontiguousarray(va), np.ascontiguousarray(vb),
+                                                             True, self.dataset.sample_time,
+                                                             float(self.dataset.pole_pairs)),
+                                       self.speed_lag, self.dataset.sample_time)[0]
                 return {k: y[c] for c, k in enumerate(WEIGHT_KEYS) if k in noise}
 
             speed = rec.speed if rec.has_speed else None
@@ -283,8 +290,8 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
     def simulate(self, X: np.ndarray) -> list[np.ndarray]:
         """Simulated (i_alpha, i_beta, speed) per record: a list of (n, 3, N) arrays."""
         coef = coefficients(self.full_parameters(X), self.dataset.pole_pairs)
-        return [startup_outputs_batch(coef, v_a, v_b, self._linear, self.dataset.sample_time,
-                                      float(self.dataset.pole_pairs))
+        h, p = self.dataset.sample_time, float(self.dataset.pole_pairs)
+        return [speed_read_through(startup_outputs_batch(coef, v_a, v_b, self._linear, h, p), self.speed_lag, h)
                 for v_a, v_b, *_ in self._records]
 
     def residuals_batch(self, X: np.ndarray) -> np.ndarray:

@@ -33,7 +33,7 @@ from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_
 from benchmark.problems.timedomain.mechanical import fit_free_stop
 from benchmark.problems.timedomain.noise import filter_pole, record_noise, stop_noise
 from benchmark.problems.timedomain.simulation import hold_is_linear
-from benchmark.problems.timedomain.speed_filter import first_order_lag, stated_speed_filter
+from benchmark.problems.timedomain.speed_filter import first_order_lag, speed_read_through, stated_speed_filter
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
 DIVERGED = 1e6
@@ -272,9 +272,7 @@ class JointModel:
             measure = getattr(eff, "measure", None)
             if measure is not None:
                 sim = measure(sim, X[:, s], self.ctx)
-        if self.speed_filter > 0.0:
-            sim = np.array(sim, copy=True)  # a cached simulation stays as it is
-            sim[:, 2] = first_order_lag(sim[:, 2], self.speed_filter, self.ctx.sample_time or 1.0)
+        sim = speed_read_through(sim, self.speed_filter, self.ctx.sample_time or 1.0)
         out = np.empty((len(X), d.n_residuals))
         k = len(self._rows_out) * d.n_startup
         out[:, :k] = np.asarray(sim)[:, self._rows_out, :].reshape(len(X), -1)
