@@ -75,6 +75,14 @@ def stated_filter(settings: BlindSettings, d: dict, injected: float | None) -> f
     return float(rng.uniform(1e-3, 5e-3))
 
 
+def coloured_speed_noise(settings: BlindSettings, d: dict, white: float) -> float:
+    """The std (rad/s) of a filtered speed sensor's own noise as it leaves its filter (a
+    tachogenerator's brushes and commutation, coloured by its RC filter), beside the
+    acquisition's ``white``: 0.5-2 times it, from the set's own stream (the other draws do not
+    change)."""
+    return float(white * np.random.default_rng([int(settings.seed), int(d["index"]), 9]).uniform(0.5, 2.0))
+
+
 def plant_speed_filter(spec: dict) -> float | None:
     """The filter (s) the plant's tachometer effect puts on the speed (:mod:`synthetic.independent.sensor_effects`),
     as ``meta.yaml`` states it: an RC filter's time constant, half an encoder's gate time."""
@@ -291,6 +299,7 @@ def motulator_source(settings: BlindSettings):
         draws[-1]["speed_filter"] = stated_filter(settings, draws[-1], None)
         if draws[-1]["speed_filter"]:  # motulator's speed sensor behind an RC filter, before its noise
             noise["speed_filter"] = draws[-1]["speed_filter"]
+            noise["speed_coloured_std"] = coloured_speed_noise(settings, draws[-1], noise["speed_std"])
 
     def make(d, folder):
         make_motulator_dataset(d["motor"], d["scenario"], d["options"] or None, d["noise"], d["seed"], Path(folder),

@@ -467,7 +467,8 @@ def test_a_blind_set_states_its_speed_filter_and_healthy_channels_carry_one_too(
     effect has a filter states its time constant, an encoder's half its gate time; of the sets
     without a tachometer effect about :data:`STATED_FILTER_WITHOUT` have an RC filter of the
     plant's own on their speed, stated the same way (so that a statement says nothing of the
-    truth); motulator's speed sensor gets the same RC filter, before its noise."""
+    truth); motulator's speed sensor gets the same RC filter, before the acquisition's noise, and
+    noise of its own that the filter colours (0.5-2 times the white), none where unfiltered."""
     from pathlib import Path
 
     from hydra import compose, initialize_config_dir
@@ -495,3 +496,6 @@ def test_a_blind_set_states_its_speed_filter_and_healthy_channels_carry_one_too(
     mdraws, _ = SOURCES["motulator"](m)
     assert all(d["noise"].get("speed_filter") == d["speed_filter"] for d in mdraws)
     assert 0 < sum(d["speed_filter"] is not None for d in mdraws) < len(mdraws)
+    for d in mdraws:
+        ratio = d["noise"].get("speed_coloured_std", 0.0) / d["noise"]["speed_std"]
+        assert (0.5 <= ratio <= 2.0) if d["speed_filter"] else ratio == 0.0
