@@ -39,7 +39,7 @@ from benchmark.problems.timedomain.motor import PARAMETER_NAMES, PARAMETER_UNITS
 from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
-from benchmark.problems.timedomain.speed_filter import speed_read_through
+from benchmark.problems.timedomain.speed_filter import speed_read_through, unstated_filter_hint
 from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
 
@@ -268,7 +268,8 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
     RS_DC_TOLERANCE = 0.20
 
     def quality_warnings(self, x) -> list[str]:
-        """This problem's own warnings at ``x``: Rs against the DC resistance, speed not measured."""
+        """This problem's own warnings at ``x``: Rs against the DC resistance, speed not measured, a
+        speed filter the record does not state (:func:`~.speed_filter.unstated_filter_hint`)."""
         out = []
         if self.rs_dc is not None and self.rs_dc > 0 and self.stator_resistance != "fixed":
             rs = self.estimate(x)["Rs"]
@@ -285,22 +286,28 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
                 out.append(f"Rs = {rs:.4g} ohm departs from the DC resistance {self.rs_dc:.4g} ohm{at} "
                            f"(meta.yaml stator_dc_resistance) by {100 * dev:+.0f} % (more than "
                            f"{100 * self.RS_DC_TOLERANCE:.0f} %) {advice}")
+        if self.speed_measured and self.weights[2] > 0 and not self.speed_lag:  # a filter nobody stated?
+            hint = unstated_filter_hint(self, np.asarray(x, float))
+            out += [hint] if hint else []
         return out
 
-    def simulate(self, X: np.ndarray) -> list[np.ndarray]:
-        """Simulated (i_alpha, i_beta, speed) per record: a list of (n, 3, N) arrays."""
+    def simulate(self, X: np.ndarray, speed_lags: np.ndarray | None = None) -> list[np.ndarray]:
+        """Simulated (i_alpha, i_beta, speed) per record: a list of (n, 3, N) arrays, the speed read
+        through the stated filter (``speed_lags``, s: each row's own instead)."""
         coef = coefficients(self.full_parameters(X), self.dataset.pole_pairs)
         h, p = self.dataset.sample_time, float(self.dataset.pole_pairs)
-        return [speed_read_through(startup_outputs_batch(coef, v_a, v_b, self._linear, h, p), self.speed_lag, h)
+        lags = self.speed_lag if speed_lags is None else speed_lags
+        return [speed_read_through(startup_outputs_batch(coef, v_a, v_b, self._linear, h, p), lags, h)
                 for v_a, v_b, *_ in self._records]
 
-    def residuals_batch(self, X: np.ndarray) -> np.ndarray:
+    def residuals_batch(self, X: np.ndarray, speed_lags: np.ndarray | None = None) -> np.ndarray:
         """Weighted residuals ``sqrt(k) (x_meas - x_sim)`` of each candidate: (n, 3*N_total),
         0 at the masked current samples. Their sum of squares is the eq. 14 cost with the same
-        weights and mask."""
+        weights and mask. ``speed_lags``: as for :meth:`simulate`."""
         parts = []
         sw = np.sqrt(self.weights)[None, :, None]
-        for sim, (_, _, i_a, i_b, w), used in zip(self.simulate(X), self._records, self._current_used, strict=True):
+        for sim, (_, _, i_a, i_b, w), used in zip(self.simulate(X, speed_lags), self._records, self._current_used,
+                                                  strict=True):
             meas = np.stack([i_a, i_b, w])[None]
             e = sw * (meas - sim)
             if used is not None:  # masked current samples: residual 0 (no cost, no Jacobian row)

@@ -67,9 +67,56 @@ def first_order_lag(w: np.ndarray, tau: np.ndarray | float, dt: float) -> np.nda
 def speed_read_through(sim: np.ndarray, tau: float, dt: float) -> np.ndarray:
     """Simulated outputs ``sim`` (n, 3, N): i_alpha, i_beta, speed at samples ``dt`` s apart,
     with the speed read through the stated filter ``tau`` (s); ``sim`` itself when ``tau`` is 0
-    (a copy otherwise: a cached simulation stays as it is)."""
-    if not tau > 0.0:
+    (a copy otherwise: a cached simulation stays as it is); ``tau`` may be one per row (n,)."""
+    if not np.any(np.asarray(tau) > 0.0):
         return sim
     out = np.array(sim, copy=True)
     out[:, 2] = first_order_lag(out[:, 2], tau, dt)
     return out
+
+
+#: :func:`unstated_filter_hint` looks for a filter where the speed's misfit (RMS over its noise)
+#: exceeds this, and names one that takes at least :data:`HINT_SHARE` of that misfit away. A
+#: warning's thresholds, not a verdict's: the user is asked to check the instrument.
+HINT_MISFIT = 1.5
+HINT_SHARE = 0.5
+#: The evaluations of the hint's fit (the model's parameters and the filter together, by least squares).
+HINT_EVALUATIONS = 300
+
+
+def speed_misfit(problem, X: np.ndarray, lags) -> float:
+    """The first start-up's speed misfit (RMS over its noise estimate) of ``problem``'s model at
+    ``X`` (one row), its speed read through a filter of ``lags`` (s)."""
+    noise = problem.channel_noise()[0][2]
+    w = problem.simulate(X, np.asarray(lags, float))[0][0, 2]
+    return float(np.sqrt(np.mean((problem._records[0][4] - w) ** 2))) / noise.std
+
+
+def unstated_filter_hint(problem, x: np.ndarray) -> str | None:
+    """A warning when a record states no speed filter but its speed reads like the model's
+    through one: the time-domain ``problem``'s parameters and a first-order filter's time
+    constant fitted together by least squares from the estimate ``x`` (:data:`HINT_EVALUATIONS`);
+    named when the speed's misfit exceeds :data:`HINT_MISFIT` times its noise and the fit,
+    with a filter of 0 to :data:`MAX_SPEED_FILTER` s, leaves at most :data:`HINT_SHARE` of it.
+    The identification's result is not changed: a filter is a fact the user states (a 3 ms
+    filter read raw on a motulator start left the speed 21 times its noise with biased
+    resistances: from those, the filter alone, the parameters held, explained a third)."""
+    from benchmark.core.polish import least_squares_batch
+
+    before = speed_misfit(problem, x[None, :], [0.0])
+    if not before > HINT_MISFIT:
+        return None
+    z0 = np.append(x, 1e-3)
+    lower, upper = np.append(problem.lower, 0.0), np.append(problem.upper, MAX_SPEED_FILTER)
+    with np.errstate(all="ignore"):
+        z, _ = least_squares_batch(lambda Z: problem.residuals_batch(Z[:, :-1], Z[:, -1]), z0, lower, upper,
+                                   HINT_EVALUATIONS)
+    tau = float(z[-1])
+    after = speed_misfit(problem, z[None, :-1], [tau])
+    if not (0.0 < tau <= MAX_SPEED_FILTER and after <= HINT_SHARE * before):
+        return None
+    return (f"the measured speed reads like the model's through a first-order filter of {1e3 * tau:.2g} ms "
+            f"(fitted with the model's parameters: the speed's misfit {before:.3g} times its noise, {after:.3g} "
+            f"with it): if the speed channel has a filter (a tachogenerator's RC filter; half an encoder's gate "
+            f"time), state it in meta.yaml, `speed_filter: {tau:.2g}` (s), and the models read their speed "
+            f"through it")

@@ -109,11 +109,34 @@ def test_the_identification_reads_the_speed_through_the_stated_filter(records):
     errors = {k: abs(stated.estimate[k] / PAR[k] - 1.0) for k in PAR}
     assert max(errors.values()) < 3e-3, errors
     assert stated.fit_quality["speed"]["at_noise_level"], stated.fit_quality["speed"]
+    assert not any("speed_filter:" in w for w in stated.warnings)
     unstated_ds = with_meta_key(folder, "speed_filter", None)
     unstated = api.identify(str(folder), seed=0)
     assert unstated.fit_quality["speed"]["ratio"] > 5.0
     assert max(abs(unstated.estimate[k] / PAR[k] - 1.0) for k in ("Rs", "Rr")) > 5e-3
+    # ... and its warnings ask for the filter the speed reads through (fitted with the parameters: 3 ms)
+    hint = [w for w in unstated.warnings if "first-order filter of" in w]
+    assert len(hint) == 1 and "`speed_filter: 0.003` (s)" in hint[0], unstated.warnings
     problem = problem_from_dataset(TimeDomainSettings(), unstated_ds, None)
     X = np.array([[PAR[n] * f for n in problem.parameter_names] for f in (1.0, 1.02)])
     by_residuals = [problem.cost_from_residuals(r) for r in problem.residuals_batch(X)]
     np.testing.assert_allclose(problem.evaluate(X), by_residuals, rtol=1e-9)
+
+
+def test_no_filter_is_asked_for_where_the_speed_misses_for_another_reason(tmp_path):
+    """A tachometer reading 2 % high on an unfiltered channel: the speed misses the model, but no
+    filter takes half of that away, and no filter is asked for."""
+    pytest.importorskip("motulator")
+    import pandas as pd
+
+    from benchmark import api
+    from synthetic.motulator_source import make_motulator_dataset
+
+    make_motulator_dataset(SMALL, "dol", None, {"current_std": 0.04, "speed_std": 0.05}, 6, tmp_path, duration=0.5,
+                           sample_rate=10000.0, stop=False)
+    table = pd.read_csv(tmp_path / "startup.csv")
+    table["speed"] *= 1.02
+    table.to_csv(tmp_path / "startup.csv", index=False)
+    result = api.identify(str(tmp_path), seed=0)
+    assert not result.fit_quality["speed"]["at_noise_level"]
+    assert not any("first-order filter of" in w for w in result.warnings), result.warnings
