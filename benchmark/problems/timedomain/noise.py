@@ -51,6 +51,7 @@ from benchmark.core.noise_estimates import (
     refine_frequency,
 )
 from benchmark.problems.timedomain.frames import phasor_speed
+from benchmark.problems.timedomain.speed_filter import filter_pole
 
 #: Fallback relative uncertainty of the fourth-difference estimate.
 FALLBACK_REL_UNCERTAINTY = 0.2
@@ -461,17 +462,6 @@ def stop_noise(speed: np.ndarray, w0: float, pole: float = 0.0) -> NoiseEstimate
         return floored(noise_from_smooth(speed, window, pole=pole), speed, floor)
     except ValueError as exc:
         return fallback(speed, floor, str(exc))
-
-
-def filter_pole(speed_filter: float | None, dt: float) -> float:
-    """The per-sample pole ``exp(-dt / tau)`` that the speed channel's stated filter (``tau`` =
-    ``speed_filter``, s; 0 or None: none) gives noise entering before it, at the sample time
-    ``dt`` (s); 0 when there is none. A tachogenerator's own noise (brushes, commutation) passes
-    its RC filter: the recorded noise is then coloured, mostly slower than a smoothing window,
-    which took it for signal and put an effect-free record's gap at 1.5 (motulator, a 5 ms
-    filter: 0.018 rad/s estimated where 0.044 was recorded)."""
-    tau = float(speed_filter or 0.0)
-    return math.exp(-dt / tau) if tau > 0.0 and dt > 0.0 else 0.0
 
 
 def combined(noise: dict[str, NoiseEstimate], counts: dict[str, int]) -> NoiseEstimate:

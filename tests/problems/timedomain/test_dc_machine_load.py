@@ -13,7 +13,7 @@ import pytest
 from scipy import optimize
 
 from benchmark.core.effects import effect_context, load_effects
-from benchmark.problems.timedomain.diagnosis.fit import switched_at_end
+from benchmark.problems.timedomain.diagnosis.free_coast import switched_at_end
 from benchmark.problems.timedomain.extended import IDX, base_row, simulate_extended_batch
 from benchmark.problems.timedomain.extended_mechanics import _switched
 from benchmark.problems.timedomain.protocol import StartupStopTest

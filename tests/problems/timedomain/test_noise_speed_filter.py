@@ -12,7 +12,8 @@ import pytest
 from benchmark.core.effects import EffectContext
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
-from benchmark.problems.timedomain.noise import filter_pole, record_noise
+from benchmark.problems.timedomain.noise import record_noise
+from benchmark.problems.timedomain.speed_filter import filter_pole
 from tests.conftest import with_meta_key
 
 PAR = {"Rs": 4.96434, "Ls": 0.1075, "Le": 0.01098, "Rr": 1.55618, "J": 0.003, "fv": 0.00033, "fc": 0.04297}

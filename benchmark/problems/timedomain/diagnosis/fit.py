@@ -26,14 +26,19 @@ from benchmark.core.uncertainty import hac_covariance, standard_errors
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.diagnosis.engine import quiet
 from benchmark.problems.timedomain.diagnosis.folds import segment_folds
-from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast
+from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast, switched_at_end
 from benchmark.problems.timedomain.diagnosis.kernel_cache import CACHE_ROWS, KernelCache, RowCache
 from benchmark.problems.timedomain.extended import IDX, base_rows, valid_rows
 from benchmark.problems.timedomain.filters import free_motion_start, zero_phase_lowpass
 from benchmark.problems.timedomain.mechanical import fit_free_stop
-from benchmark.problems.timedomain.noise import filter_pole, record_noise, stop_noise
+from benchmark.problems.timedomain.noise import record_noise, stop_noise
 from benchmark.problems.timedomain.simulation import hold_is_linear
-from benchmark.problems.timedomain.speed_filter import first_order_lag, speed_read_through, stated_speed_filter
+from benchmark.problems.timedomain.speed_filter import (
+    filter_pole,
+    first_order_lag,
+    speed_read_through,
+    stated_speed_filter,
+)
 
 CHANNELS = ("i_alpha", "i_beta", "speed", "stop_speed")
 DIVERGED = 1e6
@@ -467,19 +472,6 @@ class JointModel:
         # a parameter the residuals do not depend on here (the magnetising node's place while
         # the leakage saturates too) is not determined: nan, not the pseudo-inverse's 0
         return np.where(np.any(J != 0.0, axis=0), standard_errors(cov), np.nan)
-
-
-def switched_at_end(col: dict, t_end: float) -> np.ndarray:
-    """(n, 1) envelope of the switched load (``T_s``) at the start-up record's end ``t_end`` (s):
-    on (1) when a step came on before it; with a first-order rise (``tau_s > 0``) its value there,
-    and after a switch-off (``t_step_off``) the decay since (the stop record starts from it)."""
-    t_on, tau, t_off = col["t_step"], col["tau_s"], col["t_step_off"]
-    with np.errstate(all="ignore"):
-        safe = np.where(tau > 0, tau, 1.0)
-        off = (t_off > t_on) & (t_off <= t_end)
-        rise = 1.0 - np.exp(-(np.where(off, t_off, t_end) - t_on) / safe)
-        env = np.where(off, rise * np.exp(-(t_end - t_off) / safe), rise)
-    return np.where(tau > 0, np.where(t_on < t_end, env, 0.0), (t_on < t_end).astype(float))
 
 
 def stop_mechanics(data: DiagnosisData, case: int):

@@ -350,3 +350,16 @@ def _brake_lanes(t, rows, sub, w0, J, fv, A, C, T_b, w_ref, r, tau, w):
         for l in range(L):
             if alive[l]:
                 w[rows[l], j] = x[l]
+
+
+def switched_at_end(col: dict, t_end: float) -> np.ndarray:
+    """(n, 1) envelope of the switched load (``T_s``) at the start-up record's end ``t_end`` (s):
+    on (1) when a step came on before it; with a first-order rise (``tau_s > 0``) its value there,
+    and after a switch-off (``t_step_off``) the decay since (the stop record starts from it)."""
+    t_on, tau, t_off = col["t_step"], col["tau_s"], col["t_step_off"]
+    with np.errstate(all="ignore"):
+        safe = np.where(tau > 0, tau, 1.0)
+        off = (t_off > t_on) & (t_off <= t_end)
+        rise = 1.0 - np.exp(-(np.where(off, t_off, t_end) - t_on) / safe)
+        env = np.where(off, rise * np.exp(-(t_end - t_off) / safe), rise)
+    return np.where(tau > 0, np.where(t_on < t_end, env, 0.0), (t_on < t_end).astype(float))
