@@ -100,7 +100,7 @@ def speed_misfit(problem, X: np.ndarray, lags) -> float:
     ``X`` (one row), its speed read through a filter of ``lags`` (s)."""
     noise = problem.channel_noise()[0][2]
     w = problem.simulate(X, np.asarray(lags, float))[0][0, 2]
-    return float(np.sqrt(np.mean((problem._records[0][4] - w) ** 2))) / noise.std
+    return float(np.sqrt(np.mean((np.asarray(problem.dataset.startups[0].speed, float) - w) ** 2))) / noise.std
 
 
 def unstated_filter_hint(problem, x: np.ndarray) -> str | None:
