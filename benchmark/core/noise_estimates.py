@@ -231,17 +231,23 @@ def noise_from_smooth(x, window: int, polyorder: int = 2, pole: float = 0.0) -> 
     """
     if pole > 0.0:
         return smooth_two_colour(x, window, polyorder, pole)
-    x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
-    if window <= polyorder + 1 or len(x) < 3 * window:
-        raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
-    half = window // 2
-    h0 = float(signal.savgol_coeffs(window, polyorder)[half])
-    e = (x - signal.savgol_filter(x, window, polyorder, mode="interp"))[half:len(x) - half]
+    window, e = smooth_residual(x, window, polyorder)
+    h0 = float(signal.savgol_coeffs(window, polyorder)[window // 2])
     r = np.array([np.dot(e[lag:], e[:-lag]) for lag in range(1, window + 1)]) / float(e @ e)
     n_eff = len(e) / (1 + 2 * float(np.sum(r**2)))
     std = math.sqrt(float(e @ e) / (len(e) * (1.0 - h0)))
     return NoiseEstimate(std, 1.0 / math.sqrt(2 * n_eff), n_eff,
                          f"smooth (Savitzky-Golay window {window}, order {polyorder})")
+
+
+def smooth_residual(x, window: int, polyorder: int) -> tuple[int, np.ndarray]:
+    """(the odd window used, the interior residual of a Savitzky-Golay fit of ``x``: half a window
+    from each end left out); ``x`` must hold three windows."""
+    x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
+    if window <= polyorder + 1 or len(x) < 3 * window:
+        raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
+    half = window // 2
+    return window, (x - signal.savgol_filter(x, window, polyorder, mode="interp"))[half:len(x) - half]
 
 
 #: Simulated records of the fitted noise behind :func:`smooth_two_colour`'s uncertainty.
@@ -259,11 +265,9 @@ def _residual_autocovariance(window: int, polyorder: int, pole: float, lags: int
     return np.column_stack([np.sum(g * (d == 0), axis=1), np.sum(g * pole ** d.astype(float), axis=1)])
 
 
-def _two_colour_levels(x: np.ndarray, window: int, polyorder: int, kernel: np.ndarray) -> np.ndarray:
+def _two_colour_levels(e: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     """(white variance, coloured variance) fitted (non-negative least squares) to the
-    autocovariance of ``x``'s interior Savitzky-Golay residual at the lags of ``kernel``."""
-    half = window // 2
-    e = (x - signal.savgol_filter(x, window, polyorder, mode="interp"))[half:len(x) - half]
+    autocovariance of a Savitzky-Golay residual ``e`` at the lags of ``kernel``."""
     n = len(e)
     gamma = np.array([np.dot(e[k:], e[:n - k]) / n for k in range(len(kernel))])
     return optimize.nnls(kernel, gamma)[0]
@@ -280,13 +284,12 @@ def smooth_two_colour(x, window: int, polyorder: int, pole: float) -> NoiseEstim
     of the estimate over :data:`TWO_COLOUR_REPLICATES` simulated records of the fitted noise
     (fixed seed), at least the white estimate's ``1 / sqrt(2 N_eff)``: the coloured level is read
     through the small share of it the residual keeps."""
-    x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
-    if window <= polyorder + 1 or len(x) < 3 * window:
-        raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
+    x = np.asarray(x, dtype=float).ravel()
+    window, e = smooth_residual(x, window, polyorder)
     if not 0.0 < pole < 1.0:
         raise ValueError(f"pole must be in (0, 1), got {pole}")
     kernel = _residual_autocovariance(window, polyorder, pole, window)
-    levels = _two_colour_levels(x, window, polyorder, kernel)
+    levels = _two_colour_levels(e, kernel)
     std = math.sqrt(float(levels.sum()))
     white = noise_from_smooth(x, window, polyorder)
     rng = np.random.default_rng(0)
@@ -296,7 +299,7 @@ def smooth_two_colour(x, window: int, polyorder: int, pole: float) -> NoiseEstim
         w[0] /= math.sqrt(1.0 - pole**2)
         coloured = math.sqrt(1.0 - pole**2) * signal.lfilter([1.0], [1.0, -pole], w)[1:]
         sim = math.sqrt(levels[0]) * rng.standard_normal(len(x)) + math.sqrt(levels[1]) * coloured
-        sims.append(math.sqrt(float(_two_colour_levels(sim, window, polyorder, kernel).sum())))
+        sims.append(math.sqrt(float(_two_colour_levels(smooth_residual(sim, window, polyorder)[1], kernel).sum())))
     u = max(float(np.std(sims)) / max(std, 1e-300), white.rel_uncertainty) if std > 0 else white.rel_uncertainty
     share = float(levels[1] / levels.sum()) if std > 0 else 0.0
     return NoiseEstimate(std, u, 1.0 / (2.0 * u * u), f"smooth (Savitzky-Golay window {window}, order {polyorder}), "
