@@ -15,9 +15,8 @@ from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointMode
 from benchmark.problems.timedomain.noise import record_noise
 from benchmark.problems.timedomain.speed_filter import filter_pole
 from tests.conftest import with_meta_key
+from tests.synthetic.test_motulator_source import PAR, SMALL  # motulator's small 2-pole motor
 
-PAR = {"Rs": 4.96434, "Ls": 0.1075, "Le": 0.01098, "Rr": 1.55618, "J": 0.003, "fv": 0.00033, "fc": 0.04297}
-SMALL = {"name": "small_2pole", "pole_pairs": 1, "voltage": 230.0, "frequency": 50.0, "parameters": PAR}
 TAU = 3e-3  #: s, the speed channel's RC filter
 #: rad/s: the acquisition's white noise, the sensor's own noise as it leaves the filter
 NOISE = {"current_std": 0.04, "speed_std": 0.05, "speed_coloured_std": 0.1, "speed_filter": TAU}
