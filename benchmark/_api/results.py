@@ -189,6 +189,9 @@ class Diagnosis(_Document):
         the base model's parameters in the final model, with standard errors (SI units).
     document
         the whole ``diagnosis.json`` document.
+    warnings
+        what may make the verdict wrong, in words (a speed that reads as through a filter the
+        record does not state).
     report
         the text of ``diagnosis.md`` (what ``str()`` prints).
     outdir
@@ -203,6 +206,7 @@ class Diagnosis(_Document):
     gap_after: float | None
     per_effect: list[dict]
     base: dict
+    warnings: list[str]
     document: dict = field(repr=False)
     report: str = field(repr=False)
     outdir: Path | None = None
@@ -216,7 +220,8 @@ class Diagnosis(_Document):
         return cls(status=doc["status"], verdict=str(doc.get("verdict", "")), effects=list(doc.get("effects") or []),
                    explained_share=float(doc.get("explained_share") or 0.0), gap_before=gap("gap_before"),
                    gap_after=gap("gap_after"), per_effect=list(doc.get("per_effect") or []),
-                   base=dict(doc.get("base") or {}), document=doc, report=report,
+                   base=dict(doc.get("base") or {}), warnings=list(doc.get("warnings") or []),
+                   document=doc, report=report,
                    outdir=None if outdir is None else Path(outdir))
 
     @property

@@ -108,12 +108,18 @@ def run_diagnosis(cfg: DictConfig, outdir: Path, progress=None) -> dict:
     """Diagnose the configured data set into ``outdir`` through the problem's ``diagnose`` hook
     (the truth of synthetic data is discarded here); returns the diagnosis document."""
     dataset, _ = load_dataset(cfg, with_truth=False)
+    return instantiate(cfg.problem.diagnose)(resolved(cfg), dataset, outdir, base_identify(cfg), progress)
+
+
+def base_identify(cfg: DictConfig):
+    """``identify(problem, seed=...)`` with a diagnosis run's optimiser, budgets and polish: how
+    the diagnosis identifies its base model (``concurrent_runs`` set from the plugin)."""
     plugin = instantiate(cfg.optimizer.plugin)
     base = functools.partial(identify, plugin=plugin, budget=int(cfg.budget),
                              seed=int(cfg.seed), name=str(cfg.optimizer.name),
                              polish_budget=int(cfg.polish_budget))
     base.concurrent_runs = concurrent_runs(plugin)
-    return instantiate(cfg.problem.diagnose)(resolved(cfg), dataset, outdir, base, progress)
+    return base
 
 
 def concurrent_runs(plugin) -> bool:

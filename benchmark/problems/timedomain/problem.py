@@ -39,7 +39,7 @@ from benchmark.problems.timedomain.motor import PARAMETER_NAMES, PARAMETER_UNITS
 from benchmark.problems.timedomain.noise import record_noise, supply_frequency_of
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cost_batch, startup_outputs_batch
-from benchmark.problems.timedomain.speed_filter import speed_read_through, unstated_filter_hint
+from benchmark.problems.timedomain.speed_filter import UnstatedFilter, speed_read_through, unstated_filter
 from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
 
@@ -269,7 +269,7 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
 
     def quality_warnings(self, x) -> list[str]:
         """This problem's own warnings at ``x``: Rs against the DC resistance, speed not measured, a
-        speed filter the record does not state (:func:`~.speed_filter.unstated_filter_hint`)."""
+        speed filter the record does not state (:meth:`unstated_speed_filter`)."""
         out = []
         if self.rs_dc is not None and self.rs_dc > 0 and self.stator_resistance != "fixed":
             rs = self.estimate(x)["Rs"]
@@ -286,10 +286,16 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
                 out.append(f"Rs = {rs:.4g} ohm departs from the DC resistance {self.rs_dc:.4g} ohm{at} "
                            f"(meta.yaml stator_dc_resistance) by {100 * dev:+.0f} % (more than "
                            f"{100 * self.RS_DC_TOLERANCE:.0f} %) {advice}")
-        if self.speed_measured and self.weights[2] > 0 and not self.speed_lag:  # a filter nobody stated?
-            hint = unstated_filter_hint(self, np.asarray(x, float))
-            out += [hint] if hint else []
-        return out
+        hint = self.unstated_speed_filter(x)
+        return out + ([hint.warning] if hint else [])
+
+    def unstated_speed_filter(self, x) -> UnstatedFilter | None:
+        """A filter the record does not state but the speed reads through at ``x``
+        (:func:`~.speed_filter.unstated_filter`), or None: also None where the record states
+        one, measures no speed or the cost does not weigh it."""
+        if self.speed_measured and self.weights[2] > 0 and not self.speed_lag:
+            return unstated_filter(self, np.asarray(x, float))
+        return None
 
     def simulate(self, X: np.ndarray, speed_lags: np.ndarray | None = None) -> list[np.ndarray]:
         """Simulated (i_alpha, i_beta, speed) per record: a list of (n, 3, N) arrays, the speed read

@@ -18,6 +18,7 @@ tachometer and a double cage where a filter was stated and free up to it, seed 4
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -86,7 +87,7 @@ def speed_read_through(sim: np.ndarray, tau: float, dt: float) -> np.ndarray:
     return out
 
 
-#: :func:`unstated_filter_hint` looks for a filter where the speed's misfit (RMS over its noise)
+#: :func:`unstated_filter` looks for a filter where the speed's misfit (RMS over its noise)
 #: exceeds this, and names one that takes at least :data:`HINT_SHARE` of that misfit away. A
 #: warning's thresholds, not a verdict's: the user is asked to check the instrument.
 HINT_MISFIT = 1.5
@@ -103,14 +104,32 @@ def speed_misfit(problem, X: np.ndarray, lags) -> float:
     return float(np.sqrt(np.mean((np.asarray(problem.dataset.startups[0].speed, float) - w) ** 2))) / noise.std
 
 
-def unstated_filter_hint(problem, x: np.ndarray) -> str | None:
-    """A warning when a record states no speed filter but its speed reads like the model's
-    through one: the time-domain ``problem``'s parameters and a first-order filter's time
-    constant fitted together by least squares from the estimate ``x`` (:data:`HINT_EVALUATIONS`);
-    named when the speed's misfit exceeds :data:`HINT_MISFIT` times its noise and the fit,
-    with a filter of 0 to :data:`MAX_SPEED_FILTER` s, leaves at most :data:`HINT_SHARE` of it and
-    of the misfit of its own parameters without the filter (a refit that mends the parameters, an
-    Rs 30 % off, is no filter's doing: it found one of 7 microseconds).
+@dataclass(frozen=True)
+class UnstatedFilter:
+    """A speed filter a record does not state but its speed reads through (:func:`unstated_filter`)."""
+
+    time_constant: float  #: s, fitted with the model's parameters
+    misfit_before: float  #: the speed's misfit (RMS over its noise) at the parameters given
+    misfit_with: float  #: ... at the refit's parameters, read through the filter
+
+    @property
+    def warning(self) -> str:
+        """The warning in words, with the line for meta.yaml."""
+        return (f"the measured speed reads like the model's through a first-order filter of "
+                f"{1e3 * self.time_constant:.2g} ms (fitted with the model's parameters: the speed's misfit "
+                f"{self.misfit_before:.3g} times its noise, {self.misfit_with:.3g} with it): if the speed channel has "
+                f"a filter (a tachogenerator's RC filter; half an encoder's gate time), state it in meta.yaml, "
+                f"`speed_filter: {self.time_constant:.2g}` (s), and the models read their speed through it")
+
+
+def unstated_filter(problem, x: np.ndarray) -> UnstatedFilter | None:
+    """The filter a record states not but its speed reads through, or None: the time-domain
+    ``problem``'s parameters and a first-order filter's time constant fitted together by least
+    squares from the estimate ``x`` (:data:`HINT_EVALUATIONS`); named when the speed's misfit
+    exceeds :data:`HINT_MISFIT` times its noise and the fit, with a filter of 0 to
+    :data:`MAX_SPEED_FILTER` s, leaves at most :data:`HINT_SHARE` of it and of the misfit of its
+    own parameters without the filter (a refit that mends the parameters, an Rs 30 % off, is no
+    filter's doing: it found one of 7 microseconds).
     The identification's result is not changed: a filter is a fact the user states (a 3 ms
     filter read raw on a motulator start left the speed 21 times its noise with biased
     resistances: from those, the filter alone, the parameters held, explained a third)."""
@@ -129,8 +148,4 @@ def unstated_filter_hint(problem, x: np.ndarray) -> str | None:
     unfiltered = speed_misfit(problem, z[None, :-1], [0.0])  # the refit's parameters alone (x off its minimum)
     if not (0.0 < tau <= MAX_SPEED_FILTER and after <= HINT_SHARE * min(before, unfiltered)):
         return None
-    return (f"the measured speed reads like the model's through a first-order filter of {1e3 * tau:.2g} ms "
-            f"(fitted with the model's parameters: the speed's misfit {before:.3g} times its noise, {after:.3g} "
-            f"with it): if the speed channel has a filter (a tachogenerator's RC filter; half an encoder's gate "
-            f"time), state it in meta.yaml, `speed_filter: {tau:.2g}` (s), and the models read their speed "
-            f"through it")
+    return UnstatedFilter(tau, before, after)

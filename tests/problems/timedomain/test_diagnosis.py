@@ -378,8 +378,13 @@ def test_the_base_identification_keeps_the_lower_cost_of_two_seeds_and_says_when
     assert "ended apart" not in run_mod.render_markdown(doc)
 
     class Problem:
+        speed_measured, speed_lag = False, 0.0
+
         def estimate(self, x):
             return {"Rs": float(x[0]), "J": float(x[1])}
+
+        def unstated_speed_filter(self, x):
+            return None
 
         def dataset_with_nuisance(self):
             return "with nuisance"

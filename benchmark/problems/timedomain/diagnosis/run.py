@@ -26,6 +26,7 @@ from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings, 
 from benchmark.problems.timedomain.motor import PARAMETER_UNITS
 from benchmark.problems.timedomain.problem import problem_from_dataset
 from benchmark.problems.timedomain.settings import TimeDomainSettings
+from benchmark.problems.timedomain.speed_filter import speed_misfit
 from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C, copper_temperature
 from benchmark.problems.timedomain.stop_record import startup_alone, stop_record_check, stop_record_lines
 
@@ -53,11 +54,15 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     then polish) on the record with the mechanical pre-identification of ``base_case``, bounds
     from the data, from each seed of :data:`BASE_SEED_OFFSETS`, the lower cost kept; then the
     record's nuisance (a measured switch-on's flux step, :mod:`benchmark.core.nuisance`)
-    estimated with them. Everything after is a local fit about this point, so a wrong basin
-    here is a wrong diagnosis: on an independent-plant 7.5 kW six-step start, 1 seed in 16 of
-    the default pipeline ended with two local starts agreeing on J a ninth of the motor's at
-    8 times the cost. Returns the parameters, the data set with the nuisance applied (the one
-    the diagnosis's models are fitted to) and what the runs ended at."""
+    estimated with them; and whether its speed reads like the model's through a filter the record
+    does not state (``unstated_speed_filter``: the filter's time constant, the speed's misfit
+    without and with it, the identification's warning; or None), with the speed's misfit over
+    its noise (``speed_misfit``, read through the stated filter; None without a speed). Everything after is a local
+    fit about this point, so a wrong basin here is a wrong diagnosis: on an independent-plant
+    7.5 kW six-step start, 1 seed in 16 of the default pipeline ended with two local starts
+    agreeing on J a ninth of the motor's at 8 times the cost. Returns the parameters, the data
+    set with the nuisance applied (the one the diagnosis's models are fitted to) and what the
+    runs ended at."""
     # the base keeps Rs free unless the run asks for a prior (problem.stator_resistance=prior)
     rs_mode = "free" if problem_settings.stator_resistance == "auto" else problem_settings.stator_resistance
     settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None,
@@ -87,6 +92,9 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     refined = refine_nuisance(problem, x, ident.cost)
     if refined is not None and refined.accepted:
         x = refined.x
+    hint = problem.unstated_speed_filter(x)
+    record["unstated_speed_filter"] = None if hint is None else {**dataclasses.asdict(hint), "warning": hint.warning}
+    record["speed_misfit"] = speed_misfit(problem, x[None, :], [problem.speed_lag]) if problem.speed_measured else None
     est = problem.estimate(x)
     if int(base_case) == 1:
         est["fc"] = 0.0
@@ -110,6 +118,7 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
     doc["cpu_time_s"] = time.process_time() - c0  # all threads: wall time on a loaded machine misleads
     doc["wall_time_base_identification_s"] = t_base
     doc["base_identification"] = base_runs
+    doc["warnings"] = diagnosis_warnings(doc)
     doc["data"] = (run.get("data") or {}).get("path") or "synthetic (in memory; truth kept away)"
     doc["stator_dc_resistance"] = stated_resistance_check(dataset, (doc.get("base") or {}).get("estimate") or {},
                                                           problem_settings.stator_resistance)
@@ -123,6 +132,16 @@ def run_diagnosis(run: Mapping, dataset: StartupDataset, outdir: Path, identify:
         doc["figures"] = diagnosis_figures(models, doc, outdir)
         write_text_atomic(outdir / "diagnosis.json", json.dumps(doc, indent=2) + "\n")
     return doc
+
+
+def diagnosis_warnings(doc: dict) -> list[str]:
+    """What may make the verdict wrong, in words (``warnings`` of the document; the API's
+    :attr:`~benchmark._api.results.Diagnosis.warnings`): a speed that reads as through a filter the
+    record does not state (every model then reads it unfiltered, and an effect may be named for
+    the filter's lag)."""
+    hint = (doc.get("base_identification") or {}).get("unstated_speed_filter")
+    return [f"Base identification: {hint['warning']}. The effects here were chosen reading the speed "
+            "unfiltered: one may stand for the filter's lag."] if hint else []
 
 
 def stated_resistance_check(dataset: StartupDataset, final: Mapping, rs_mode: str) -> dict | None:
@@ -199,6 +218,7 @@ def render_markdown(doc: dict) -> str:
              f"Share of the excess held-out misfit (above the noise) explained: "
              f"{100 * doc['explained_share']:.0f} %.", "",
              f"Where: {loc['summary']}.", ""]
+    lines += [line for w in doc.get("warnings", []) for line in (f"**Check:** {w}", "")]
     lines += capped_fit_lines(doc.get("fits"))
     if doc["per_effect"]:
         lines += ["| effect (in order of selection) | own share (drop-one) | share beside the others (the rule's) "
