@@ -367,7 +367,8 @@ def score_row(index: int, effects: list, doc: dict, alone_no_gap=()) -> dict:
             "explained_share": float(doc["explained_share"]),
             "gap_before": float(doc["gap_before"]["heldout_rms_over_noise"]),
             "gap_after": float(doc["gap_after"]["heldout_rms_over_noise"]),
-            "invisible": bool(effects) and doc["status"] == "no_gap" and not named}
+            "invisible": bool(effects) and doc["status"] == "no_gap" and not named,
+            "warnings": list(doc.get("warnings", []))}
 
 
 def write_scores(settings: BlindSettings, rows: list[dict], out: Path, command: str, title: str) -> dict:

@@ -73,6 +73,7 @@ def summarise(rows: list[dict]) -> dict:
         "false_selection_sets": len(falsely), "false_selection_ci95": wilson(len(falsely), len(scored)),
         "channel_delay_not_injected": len(no_delay), "channel_delay_named": len(delay_named),
         "channel_delay_ci95": wilson(len(delay_named), len(no_delay)),
+        "warned_sets": [r["index"] for r in scored if r.get("warnings")],  # a Check: line in diagnosis.md
     }
 
 
@@ -114,6 +115,9 @@ def render(summary: dict, rows: list[dict], cmd: str, title: str, tuned: str) ->
         lines.append("- left out of the score (injected, but the base model's held-out gap is within the noise "
                      "band): " + ", ".join(f"set {r['index']} ({r['truth']}, {r['gap_before']:.2f})"
                                           for r in s["left_out_invisible"]))
+    if s.get("warned_sets"):
+        lines.append("- sets whose diagnosis.md opens with a **Check:** line (a speed filter nobody stated): "
+                     + ", ".join(map(str, s["warned_sets"])))
     if s.get("left_out_of_pairs"):
         lines.append("- effects of two-effect sets left out (their own base-model gap, the set made with that effect "
                      "alone, within the noise band; not named; the set scored on the other): "

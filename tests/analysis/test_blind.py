@@ -51,6 +51,9 @@ def test_scores_count_exact_sets_false_alarms_both_named_and_leave_out_invisible
     cm = np.array(s["confusion"])
     assert cm[labels.index("iron_loss+main_saturation"), labels.index("iron_loss+main_saturation")] == 1
     assert cm.sum() == 7
+    assert s["warned_sets"] == []
+    rows[3]["warnings"] = ["Base identification: the measured speed reads like the model's through a filter"]
+    assert summarise(rows)["warned_sets"] == [3]
 
 
 def test_draw_counts_give_effect_free_and_two_effect_shares():
