@@ -14,10 +14,10 @@ import pytest
 
 from synthetic.independent.forms import MOTULATOR_DEVELOPMENT, MOTULATOR_HELDOUT, MOTULATOR_RETIRED, motulator_forms_of
 from synthetic.motulator_effects import EFFECTS, steel_gap_inductance
+from tests.synthetic.test_motulator_source import PAR  # motulator's small 2-pole motor
+from tests.synthetic.test_motulator_source import SMALL as MOTULATOR_SMALL
 
-PAR = {"Rs": 4.96434, "Ls": 0.1075, "Le": 0.01098, "Rr": 1.55618, "J": 0.003, "fv": 0.00033, "fc": 0.04297}
-SMALL = {"name": "small_2pole", "pole_pairs": 1, "voltage": 230.0, "frequency": 50.0, "parameters": PAR,
-         "rated_power": 1000.0}
+SMALL = {**MOTULATOR_SMALL, "rated_power": 1000.0}  #: with a rating (the held-out forms size by its torque)
 HELD = {"main_saturation": {"form": "steel_gap", "size": 0.3, "iron_ratio": 250.0},
         "two_mass": {"form": "slip_clutch", "size": 0.4, "resonance_hz": 30.0, "damping_ratio": 0.1, "slip_share": 0.8},
         "load_torque": {"form": "battery_charger", "size": 0.5, "time": 0.0, "cut_in_ratio": 0.2}}
