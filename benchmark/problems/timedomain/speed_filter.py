@@ -123,7 +123,7 @@ class UnstatedFilter:
 
 
 def unstated_filter(problem, x: np.ndarray) -> UnstatedFilter | None:
-    """The filter a record states not but its speed reads through, or None: the time-domain
+    """A filter the record does not state but its speed reads through, or None: the time-domain
     ``problem``'s parameters and a first-order filter's time constant fitted together by least
     squares from the estimate ``x`` (:data:`HINT_EVALUATIONS`); named when the speed's misfit
     exceeds :data:`HINT_MISFIT` times its noise and the fit, with a filter of 0 to

@@ -57,12 +57,12 @@ def identify_base(problem_settings: TimeDomainSettings, ds: StartupDataset, base
     estimated with them; and whether its speed reads like the model's through a filter the record
     does not state (``unstated_speed_filter``: the filter's time constant, the speed's misfit
     without and with it, the identification's warning; or None), with the speed's misfit over
-    its noise (``speed_misfit``, read through the stated filter; None without a speed). Everything after is a local
-    fit about this point, so a wrong basin here is a wrong diagnosis: on an independent-plant
-    7.5 kW six-step start, 1 seed in 16 of the default pipeline ended with two local starts
-    agreeing on J a ninth of the motor's at 8 times the cost. Returns the parameters, the data
-    set with the nuisance applied (the one the diagnosis's models are fitted to) and what the
-    runs ended at."""
+    its noise (``speed_misfit``, read through the stated filter; None without a speed).
+    Everything after is a local fit about this point, so a wrong basin here is a wrong
+    diagnosis: on an independent-plant 7.5 kW six-step start, 1 seed in 16 of the default
+    pipeline ended with two local starts agreeing on J a ninth of the motor's at 8 times the
+    cost. Returns the parameters, the data set with the nuisance applied (the one the
+    diagnosis's models are fitted to) and what the runs ended at."""
     # the base keeps Rs free unless the run asks for a prior (problem.stator_resistance=prior)
     rs_mode = "free" if problem_settings.stator_resistance == "auto" else problem_settings.stator_resistance
     settings = dataclasses.replace(problem_settings, friction_case=int(base_case), preset_bounds=None,
