@@ -262,8 +262,8 @@ def test_diagnosis_never_opens_truth_files(tmp_path):
 
 
 def test_fits_that_stop_at_their_cap_are_counted_per_cap_and_reported():
-    from benchmark.problems.timedomain.diagnosis.fit import FitTally
     from benchmark.problems.timedomain.diagnosis.pipeline import fits_ended
+    from benchmark.problems.timedomain.diagnosis.record import FitTally
     from benchmark.problems.timedomain.diagnosis.run import capped_fit_lines
 
     tally = FitTally()

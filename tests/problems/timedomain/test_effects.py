@@ -205,7 +205,7 @@ def test_an_iron_loss_far_below_any_real_core_is_not_named():
     applies to it: fitted on all data at a tenth of the smallest real loss or less, it is not
     named. The fits of held-out plant seed 430: 0.0226-0.0654 p.u. where an iron loss was injected
     (sets 7, 14, 15), 0.00033 p.u. beside an eddy-current brake's load where none was (set 11)."""
-    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE
+    from benchmark.problems.timedomain.diagnosis.backward import NEGLIGIBLE_SHARE
 
     eff, ctx = EFFECTS["iron_loss"], _ctx()
     assert eff.fitted_size(np.array([0.02, 0.5]), ctx) == pytest.approx(50.0)
@@ -231,7 +231,7 @@ def test_a_load_far_below_any_bench_load_is_not_named():
     saturation and an iron loss, no load) named a load of 0.0040 last; the loads named where one
     was injected (held-out draws 450-457) were fitted at 0.032-0.86."""
 
-    from benchmark.problems.timedomain.diagnosis.selection import NEGLIGIBLE_SHARE
+    from benchmark.problems.timedomain.diagnosis.backward import NEGLIGIBLE_SHARE
 
     eff, ctx = EFFECTS["load_torque"], _ctx()
     x = np.array([0.01, 0.02, 0.03, 0.5, 1.0, 0.02, 1.0, 0.0])  # switched part's instant, law...: not its size

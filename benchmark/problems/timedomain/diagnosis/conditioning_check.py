@@ -107,7 +107,7 @@ def at_rest_row(ds: StartupDataset, sel: Selector) -> dict | None:
 def selector_for(ds: StartupDataset, sel: Selector) -> Selector:
     """A selector of ``ds`` (the record with removals put back) with ``sel``'s noise levels,
     scales, settings and rule, so that its held-out chi^2 compare with ``sel``'s, and ``sel``'s
-    tally of fits (:class:`.fit.FitTally`), so that the document's ``fits`` counts these refits too."""
+    tally of fits (:class:`.record.FitTally`), so that the document's ``fits`` counts these refits too."""
     data = replace(DiagnosisData.from_dataset(ds), noise=sel.data.noise)
     data.fits = sel.data.fits
     masks = dict(zip(FOLDS, segment_folds(data), strict=True))

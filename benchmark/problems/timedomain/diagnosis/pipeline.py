@@ -255,7 +255,7 @@ def diagnose(ds: StartupDataset, base_estimate: dict[str, float], effects: dict[
 
 
 def fits_ended(tally, cap: int) -> dict:
-    """How the selection's local fits ended (:class:`.fit.FitTally`): of those run to convergence
+    """How the selection's local fits ended (:class:`.record.FitTally`): of those run to convergence
     (evaluation cap ``cap``, ``diagnosis.max_iterations``), how many stopped at the cap instead;
     ``by_cap`` every cap's ``[fits, stopped at it]`` (the screening's brief legs stop at theirs by design)."""
     n, at_cap = tally.by_cap.get(int(cap), [0, 0])
