@@ -1,4 +1,4 @@
-"""Tests of the GENESIS 5.0 clone (plugins/genesis.py)."""
+"""Tests of the GENESIS 5.0 clone (plugins/genesis/)."""
 
 from __future__ import annotations
 
