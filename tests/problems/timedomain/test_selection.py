@@ -1,6 +1,7 @@
 """The decision rule (benchmark/problems/timedomain/diagnosis/rule.py) and the selection that
 applies it (selection.py), on fits whose held-out chi^2 are given: which effect or pair enters,
-in which order, what the backward check drops; and the load the base model holds as friction.
+in which order; and the load the base model holds as friction (what the backward check drops:
+``test_backward_check.py``).
 
 The numbers are held-out chi^2 measured on blind sets (named where they come from); the rule's
 share is set explicitly here (``Rule(0.5)``): these tests check the mechanics, the calibrated
@@ -16,86 +17,7 @@ import pytest
 
 from benchmark.problems.timedomain.diagnosis.pipeline import DiagnosisSettings
 from benchmark.problems.timedomain.diagnosis.rule import Rule, share_over_noise_band, share_removed, status_of
-from benchmark.problems.timedomain.diagnosis.selection import Selector
-
-
-class _Effect(SimpleNamespace):
-    def __init__(self, name, k=2):
-        super().__init__(name=name, extra_names=tuple(f"p{j}" for j in range(k)))
-
-
-def _fit(chi2, effects=(), in_sample=None):
-    """A fitted set; its in-sample chi^2 (reported, not decided) the held-out one unless given."""
-    return SimpleNamespace(chi2=chi2, in_sample_chi2=chi2 if in_sample is None else in_sample,
-                           names=[e.name for e in effects], effects=list(effects),
-                           model=SimpleNamespace(effects=list(effects)))
-
-
-class _Given(Selector):
-    """A selector whose fits are looked up: ``held[frozenset(names)] = chi2``; a single's or a
-    pair's screening gives its full value (``screened`` overrides it); a single's screening saw
-    it in more than one shape unless it is in ``one_shape``."""
-
-    def __init__(self, held, share=0.5, settings=None, screened=None, refits=None, negligible=(), in_sample=None,
-                 one_shape=()):
-        self.one_shape = set(one_shape)
-        self.settings = settings or DiagnosisSettings()
-        self.rule = Rule(share)
-        self.held, self.screened, self.refits = held, screened or {}, refits or {}
-        self.in_sample = in_sample or {}  # frozenset(names) -> in-sample chi^2 (default: the held-out one)
-        self.fitted, self.memo, self.small, self.refused_names = [], {}, set(negligible), set()
-
-    def fit(self, effects, sources, refit=False, progress=None):
-        """``refits``: what a drop-one refit from several starts finds where it beats the first fit."""
-        names = frozenset(e.name for e in effects)
-        self.fitted.append(sorted(names))
-        chi2 = self.held[names]
-        if refit:
-            chi2 = self.held[names] = min(chi2, self.refits.get(names, chi2))
-        return _fit(chi2, effects, self.in_sample.get(names))
-
-    def fits(self, jobs, progress=None):
-        """A job with further starts (the screening's points) is a refit, which ``refits`` answers."""
-        self.more = getattr(self, "more", []) + [job[3] for job in jobs if len(job) > 3]
-        return [self.fit(effects, sources, refit) for effects, sources, refit, *_ in jobs]
-
-    def screened_points(self, cur, name):
-        return {"A": [{"screened": name}], "B": [{"screened": name}]}
-
-    def screen_singles(self, cur, pool):
-        """A single's screening gives its full value unless ``screened`` overrides it."""
-        return {e.name: self.screened.get(frozenset(cur.names + [e.name]), self.held[frozenset(cur.names + [e.name])])
-                for e in pool}
-
-    def seen_in_one_shape(self, cur, name):
-        return name in self.one_shape
-
-    def screen_pairs(self, pool, singles):
-        cur = next(iter(singles.values())).names[:-1]
-        out = {}
-        for i, a in enumerate(pool):
-            for b in pool[i + 1:]:
-                key = frozenset(cur + [a.name, b.name])
-                out[frozenset((a.name, b.name))] = self.screened.get(key, self.held[key])
-        return out
-
-    def fold_b(self, sf):
-        return sf.chi2
-
-    def indistinguishable(self, best, others, z):
-        return []
-
-    def with_full_fit(self, sf):
-        return sf, None
-
-    def refused_on_entry(self, sf, names):
-        return next(((n, "negligible") for n in names if n in self.small), None)
-
-
-LOAD, GAIN, SKEW = _Effect("load_torque", 7), _Effect("speed_sensor_gain", 4), _Effect("channel_delay", 1)
-TWO = _Effect("two_mass", 4)
-DROP = _Effect("inverter_drop", 2)
-BAND = 1.1  # the noise band of the held-out RMS over noise: chi^2 1.21
+from tests.problems.timedomain.selection_fakes import BAND, DROP, GAIN, LOAD, SKEW, TWO, Given, given_fit
 
 
 def test_the_rule_asks_a_share_of_the_excess_left_without_the_effect_and_a_visible_gap():
@@ -136,10 +58,10 @@ def test_a_real_coupling_earns_its_place_held_out_whatever_it_gains_in_sample():
     base, coupled = frozenset(), frozenset({TWO.name})
     held = {base: 30952.61568364651, coupled: 14532.006982755438}
     in_sample = {base: 12415.23143805517, coupled: 9968.823026111975}
-    sel = _Given(held, share=0.3, in_sample=in_sample)
+    sel = Given(held, share=0.3, in_sample=in_sample)
     sel.pair_step = lambda *a, **k: None
     order, rounds = [], []
-    cur = sel.forward([TWO], _fit(held[base], in_sample=in_sample[base]), BAND, order, rounds)
+    cur = sel.forward([TWO], given_fit(held[base], in_sample=in_sample[base]), BAND, order, rounds)
     assert order == [TWO.name] and cur.chi2 == held[coupled]
     row = rounds[0]["candidates"][0]
     assert row["earns"] and abs(row["excess_reduction"] - 0.53052) < 1e-5
@@ -147,8 +69,8 @@ def test_a_real_coupling_earns_its_place_held_out_whatever_it_gains_in_sample():
     # the load beside the coupling (motulator perf record 2k2_dol_coupling_load): 99.97 % in sample
     load = {frozenset({TWO.name}): 257.8775, frozenset({TWO.name, LOAD.name}): 1.4539}
     order, rounds = [], []
-    sel = _Given(load, share=0.3, in_sample={frozenset({TWO.name}): 186.7, frozenset({TWO.name, LOAD.name}): 1.05571})
-    sel.forward([LOAD], _fit(257.8775, [TWO], in_sample=186.7), BAND, order, rounds)
+    sel = Given(load, share=0.3, in_sample={frozenset({TWO.name}): 186.7, frozenset({TWO.name, LOAD.name}): 1.05571})
+    sel.forward([LOAD], given_fit(257.8775, [TWO], in_sample=186.7), BAND, order, rounds)
     assert order == [LOAD.name] and abs(rounds[0]["candidates"][0]["in_sample_reduction"] - 0.9997) < 5e-5
 
 
@@ -169,9 +91,9 @@ def test_two_effects_that_mask_each_other_enter_together_the_stronger_alone_firs
             frozenset(["load_torque", "channel_delay"]): 960.0,
             frozenset(["speed_sensor_gain", "channel_delay"]): 870.0,
             frozenset(["load_torque", "speed_sensor_gain", "channel_delay"]): 139.0}
-    sel = _Given(held)
+    sel = Given(held)
     order, rounds = [], []
-    cur = sel.forward([LOAD, GAIN, SKEW], _fit(1000.0), BAND, order, rounds)
+    cur = sel.forward([LOAD, GAIN, SKEW], given_fit(1000.0), BAND, order, rounds)
     assert order == ["speed_sensor_gain", "load_torque"] and cur.chi2 == 140.0
     assert not any(r["earns"] for r in rounds[0]["candidates"])
     pair = rounds[1]
@@ -193,9 +115,9 @@ def test_a_hitchhiker_does_not_ride_in_on_a_pair():
             frozenset(["channel_delay"]): 995.0, frozenset(["load_torque", "speed_sensor_gain"]): 620.0,
             frozenset(["load_torque", "channel_delay"]): 700.0,
             frozenset(["speed_sensor_gain", "channel_delay"]): 985.0}
-    sel = _Given(held)
+    sel = Given(held)
     order, rounds = [], []
-    cur = sel.forward([LOAD, GAIN, SKEW], _fit(1000.0), BAND, order, rounds)
+    cur = sel.forward([LOAD, GAIN, SKEW], given_fit(1000.0), BAND, order, rounds)
     assert order == [] and cur.chi2 == 1000.0 and rounds[1]["chosen"] is None
     # the screening says no pair may earn: only the best screened (load and gain) was fitted fully
     assert not any(r["may_earn"] for r in rounds[1]["screening"])
@@ -214,9 +136,9 @@ def test_the_best_screened_pair_is_fitted_fully_whatever_its_screening_says():
     screened = {frozenset(["load_torque", "speed_sensor_gain"]): 600.0,  # a short fit that did not get there
                 frozenset(["load_torque", "channel_delay"]): 900.0,
                 frozenset(["speed_sensor_gain", "channel_delay"]): 850.0}
-    sel = _Given(held, screened=screened)
+    sel = Given(held, screened=screened)
     order, rounds = [], []
-    cur = sel.forward([LOAD, GAIN, SKEW], _fit(1000.0), BAND, order, rounds)
+    cur = sel.forward([LOAD, GAIN, SKEW], given_fit(1000.0), BAND, order, rounds)
     pairs = rounds[1]
     assert pairs["pairs"] and not any(r["may_earn"] for r in pairs["screening"])
     assert pairs["screening"][0]["effect"] == "load_torque+speed_sensor_gain" and pairs["chosen"] is not None
@@ -235,9 +157,9 @@ def test_a_round_fits_the_first_screened_and_those_the_screening_says_may_earn_e
             frozenset({LOAD.name, GAIN.name}): 2.45, frozenset({LOAD.name, TWO.name}): 2.4,
             frozenset({LOAD.name, GAIN.name, TWO.name}): 2.3}
     screened = {frozenset({GAIN.name}): 2.0, frozenset({LOAD.name}): 5.0, frozenset({TWO.name}): 9.0}
-    sel = _Given(held, screened=screened)
+    sel = Given(held, screened=screened)
     order, rounds = [], []
-    sel.forward([LOAD, GAIN, TWO], _fit(10.0), BAND, order, rounds)
+    sel.forward([LOAD, GAIN, TWO], given_fit(10.0), BAND, order, rounds)
     assert order == ["load_torque"] and rounds[0]["chosen"] == "load_torque"
     assert sorted(sel.fitted[:2]) == [["load_torque"], ["speed_sensor_gain"]] and ["two_mass"] not in sel.fitted
     assert [(r["effect"], r["fitted"]) for r in rounds[0]["screening"]] == [
@@ -258,17 +180,17 @@ def test_a_fit_that_ends_above_the_current_set_where_its_screening_earns_is_refi
     held = {frozenset(): 152.2, frozenset({LOAD.name}): 256.3, frozenset({GAIN.name}): 104.2,
             frozenset({TWO.name}): 160.0}
     screened = {frozenset({LOAD.name}): 83.5, frozenset({GAIN.name}): 97.7, frozenset({TWO.name}): 150.0}
-    sel = _Given(dict(held), share=0.3, screened=screened, refits={frozenset({LOAD.name}): 1.2},
+    sel = Given(dict(held), share=0.3, screened=screened, refits={frozenset({LOAD.name}): 1.2},
                  settings=DiagnosisSettings(max_effects=1))
     order, rounds = [], []
-    sel.forward([LOAD, GAIN, TWO], _fit(152.2), BAND, order, rounds)
+    sel.forward([LOAD, GAIN, TWO], given_fit(152.2), BAND, order, rounds)
     assert order == ["load_torque"] and rounds[0]["refitted_from_screening"] == ["load_torque"]
     assert sel.more == [{"A": [{"screened": "load_torque"}], "B": [{"screened": "load_torque"}]}]
     assert {r["effect"]: r["heldout_chi2"] for r in rounds[0]["candidates"]}["load_torque"] == 1.2
     assert sel.fitted.count(["load_torque"]) == 2 and ["two_mass"] not in sel.fitted
-    stuck = _Given(dict(held), share=0.3, screened=screened, settings=DiagnosisSettings(max_effects=1))
+    stuck = Given(dict(held), share=0.3, screened=screened, settings=DiagnosisSettings(max_effects=1))
     order = []
-    stuck.forward([LOAD, GAIN, TWO], _fit(152.2), BAND, order, [])
+    stuck.forward([LOAD, GAIN, TWO], given_fit(152.2), BAND, order, [])
     assert order == ["speed_sensor_gain"]  # the refit found nothing better: the verdict as before
 
 
@@ -281,9 +203,9 @@ def test_a_candidate_the_screening_could_not_assess_is_fitted_fully():
     held = {frozenset(): 12.45, frozenset({TWO.name}): 2.99, frozenset({DROP.name}): 1.01,
             frozenset({GAIN.name}): 12.3}
     screened = {frozenset({TWO.name}): 3.13, frozenset({DROP.name}): 72.97, frozenset({GAIN.name}): 12.3}
-    sel = _Given(held, screened=screened)
+    sel = Given(held, screened=screened)
     order, rounds = [], []
-    sel.forward([TWO, DROP, GAIN], _fit(12.45), BAND, order, rounds)
+    sel.forward([TWO, DROP, GAIN], given_fit(12.45), BAND, order, rounds)
     assert order == ["inverter_drop"] and rounds[0]["chosen"] == "inverter_drop"
     assert sorted(sel.fitted) == [["inverter_drop"], ["two_mass"]]
     assert [(r["effect"], r["fitted"]) for r in rounds[0]["screening"]] == [
@@ -300,13 +222,13 @@ def test_a_candidate_the_screening_saw_in_one_shape_only_is_fitted_fully():
             frozenset({DROP.name}): 119.0}
     screened = {frozenset({GAIN.name}): 62.27, frozenset({LOAD.name}): 144.44, frozenset({DROP.name}): 119.91}
     settings = DiagnosisSettings(max_effects=1)
-    blind = _Given(dict(held), screened=screened, settings=settings)
+    blind = Given(dict(held), screened=screened, settings=settings)
     order = []
-    blind.forward([GAIN, LOAD, DROP], _fit(144.47), BAND, order, [])
+    blind.forward([GAIN, LOAD, DROP], given_fit(144.47), BAND, order, [])
     assert order == ["speed_sensor_gain"] and blind.fitted == [["speed_sensor_gain"]]
-    seen = _Given(dict(held), screened=screened, settings=settings, one_shape={LOAD.name})
+    seen = Given(dict(held), screened=screened, settings=settings, one_shape={LOAD.name})
     order, rounds = [], []
-    seen.forward([GAIN, LOAD, DROP], _fit(144.47), BAND, order, rounds)
+    seen.forward([GAIN, LOAD, DROP], given_fit(144.47), BAND, order, rounds)
     assert order == ["load_torque"] and sorted(seen.fitted) == [["load_torque"], ["speed_sensor_gain"]]
     assert [(r["effect"], r["fitted"], r["seen_in_one_shape"]) for r in rounds[0]["screening"]] == [
         ("speed_sensor_gain", True, False), ("inverter_drop", False, False), ("load_torque", True, True)]
@@ -315,150 +237,9 @@ def test_a_candidate_the_screening_saw_in_one_shape_only_is_fitted_fully():
 def test_no_selection_at_the_noise_level_or_beyond_the_cap():
     held = {frozenset(["load_torque"]): 1.0, frozenset(["speed_sensor_gain"]): 1.1}
     order = []
-    assert _Given(held).forward([LOAD, GAIN], _fit(1.2), BAND, order, []).chi2 == 1.2 and order == []
-    capped = _Given(held, settings=DiagnosisSettings(max_effects=0))
-    assert capped.forward([LOAD, GAIN], _fit(50.0), BAND, order, []).chi2 == 50.0
-
-
-def test_a_rider_that_removes_a_minority_of_what_is_left_is_pruned_a_real_second_effect_stays():
-    """Measured held-out chi^2 of two blind sets. Independent plant, a coupling with free play
-    (seed 12, set 17): base + two_mass + load_torque 2.408, without the load torque 2.535, without
-    the coupling 26.31: the load removes 8 % of the 1.535 left without it, dropped. Motulator
-    (seed 2, set 6), a coupling and a load torque, both injected: 2.66 with both, 8.91 without
-    the load (it removes 79 % of that excess), 76.5 without the coupling (98 %): both stay."""
-    rider = _Given({frozenset(["two_mass", "load_torque"]): 2.408, frozenset(["two_mass"]): 2.535,
-                    frozenset(["load_torque"]): 26.31, frozenset(): 40.0})
-    kept, withouts, pruned = rider.backward(_fit(2.408, [TWO, LOAD]), _fit(40.0), 1.071)
-    assert pruned == ["load_torque"] and kept.names == ["two_mass"] and withouts["two_mass"].chi2 == 40.0
-    real = _Given({frozenset(["two_mass", "load_torque"]): 2.66, frozenset(["two_mass"]): 8.91,
-                   frozenset(["load_torque"]): 76.5})
-    kept, withouts, pruned = real.backward(_fit(2.66, [TWO, LOAD]), _fit(80.0), 1.08)
-    assert pruned == [] and kept.names == ["two_mass", "load_torque"]
-    assert {n: w.chi2 for n, w in withouts.items()} == {"two_mass": 76.5, "load_torque": 8.91}
-
-
-def test_the_least_needed_effect_goes_first_and_the_check_repeats():
-    """The README bench record on a path where the iron loss won a round in a near tie: four
-    effects at 776.7; without the iron loss 791.2 (it removes 2 % of that excess), without the
-    tachometer 3902 (80 %). The iron loss goes; the three left each remove most of what the others
-    leave."""
-    loss = _Effect("iron_loss", 2)
-    held = {frozenset(["two_mass", "iron_loss", "load_torque", "speed_sensor_gain"]): 776.7,
-            frozenset(["iron_loss", "load_torque", "speed_sensor_gain"]): 10327.0,
-            frozenset(["two_mass", "load_torque", "speed_sensor_gain"]): 791.2,
-            frozenset(["two_mass", "iron_loss", "speed_sensor_gain"]): 8369.0,
-            frozenset(["two_mass", "iron_loss", "load_torque"]): 3902.0,
-            frozenset(["load_torque", "speed_sensor_gain"]): 10400.0,
-            frozenset(["two_mass", "speed_sensor_gain"]): 8500.0,
-            frozenset(["two_mass", "load_torque"]): 3950.0}
-    kept, withouts, pruned = _Given(held).backward(_fit(776.7, [TWO, loss, LOAD, GAIN]), _fit(19251.0), 1.101)
-    assert pruned == ["iron_loss"] and kept.names == ["two_mass", "load_torque", "speed_sensor_gain"]
-    assert sorted(w.chi2 for w in withouts.values()) == [3950.0, 8500.0, 10400.0]
-
-
-def test_a_pruned_effect_goes_before_a_round_is_fitted_beside_it_and_the_selection_resumes():
-    """An effect A enters first (70 % of the base's excess), C beside it (69 % of what A leaves).
-    The drop-one refit of C alone, started from the pair's point, finds C's better basin (10.5
-    against the 45 of its first fit from the base): beside C, A removes 5 % of what is left and
-    goes. The check runs as C enters, before a round is fitted beside the two (abc is fitted only
-    as the pair A+B beside C); the selection resumes from C with A still a candidate: neither A
-    (5 %) nor B (1 %) earns beside C, nor the two as a pair: C alone is named."""
-    eff_a, eff_b, eff_c = _Effect("a"), _Effect("b"), _Effect("c")
-    held = {frozenset(): 100.0, frozenset("a"): 30.0, frozenset("b"): 60.0, frozenset("c"): 45.0,
-            frozenset("ac"): 10.0, frozenset("ab"): 29.0, frozenset("abc"): 9.8, frozenset("bc"): 10.4}
-    sel = _Given(held, refits={frozenset("c"): 10.5})
-    final, _, withouts, order, pruned, rounds = sel.select([eff_a, eff_b, eff_c], _fit(100.0), BAND)
-    assert pruned == ["a"] and order == ["c"] and final.chi2 == 10.5
-    assert [r["chosen"] for r in rounds] == ["a", "c", None, None] and rounds[-1]["pairs"]
-    assert [r["from"] for r in rounds] == [[], ["a"], ["c"], ["c"]]
-    assert {c["effect"]: c["earns"] for c in rounds[2]["candidates"]} == {"a": False, "b": False}
-    assert rounds[-1]["resumed_after_pruning"] == ["a"] and withouts["c"].chi2 == 100.0
-
-
-def test_an_effect_pruned_after_an_entry_enters_again_beside_the_effect_that_masks_it():
-    """A load step (``a``) enters first (60 % of the base's excess) and a coupling (``c``) beside
-    it; the coupling alone, refitted from the pair's point, leaves 16, and beside it the load
-    removes 7 %: dropped. It stays a candidate: from the coupling no single earns (the load 7 %,
-    the tachometer's gain ``b`` 13 %), but the load and the gain mask each other and enter as a
-    pair (each removes more than 85 % of what the other leaves). Had the drop taken the load out
-    of the candidates, the coupling alone would be named, at 16."""
-    load, gain, coupling = _Effect("a"), _Effect("b"), _Effect("c")
-    held = {frozenset(): 100.0, frozenset("a"): 40.0, frozenset("b"): 90.0, frozenset("c"): 95.0,
-            frozenset("ab"): 35.0, frozenset("ac"): 15.0, frozenset("bc"): 14.0, frozenset("abc"): 2.0}
-    sel = _Given(held, refits={frozenset("c"): 16.0})
-    final, _, _, order, pruned, rounds = sel.select([load, gain, coupling], _fit(100.0), BAND)
-    assert pruned == ["a"] and sorted(final.names) == ["a", "b", "c"] and final.chi2 == 2.0
-    assert [r["chosen"] for r in rounds] == ["a", "c", None, "b+a"] and order == ["c", "b", "a"]
-
-
-def test_the_last_round_and_the_pair_step_are_fitted_once():
-    """One effect enters (70 % of the base's excess) and then nothing earns, alone or as a pair:
-    the round where none enters and the pair step run once, and the check after them ends the
-    selection (it found the set unchanged; they are not run again from the checked set)."""
-    a, b, c = _Effect("a"), _Effect("b"), _Effect("c")
-    held = {frozenset(): 100.0, frozenset("a"): 30.0, frozenset("b"): 90.0, frozenset("c"): 95.0,
-            frozenset("ab"): 29.0, frozenset("ac"): 29.5, frozenset("abc"): 28.9}
-    sel = _Given(held)
-    final, _, _, order, pruned, rounds = sel.select([a, b, c], _fit(100.0), BAND)
-    assert order == ["a"] and pruned == [] and final.chi2 == 30.0
-    assert [(r["from"], r["chosen"], bool(r.get("pairs"))) for r in rounds] == [
-        ([], "a", False), (["a"], None, False), (["a"], None, True)]
-    assert sel.fitted.count(["a", "b", "c"]) == 1
-
-
-def test_an_effect_pruned_a_second_time_leaves_the_candidates():
-    """``a`` enters, ``b`` beside it, and the refit of ``b`` alone makes ``a`` redundant (16 -> 15);
-    ``c`` enters beside ``b`` and ``a`` again beside the two (7 -> 2, 83 %), until the refit of
-    ``b + c`` reaches 2.05 and ``a`` removes 5 % of it: dropped a second time, it is out of the
-    candidates, and the selection ends with ``b + c``."""
-    a, b, c = _Effect("a"), _Effect("b"), _Effect("c")
-    held = {frozenset(): 100.0, frozenset("a"): 40.0, frozenset("b"): 60.0, frozenset("c"): 90.0,
-            frozenset("ab"): 15.0, frozenset("ac"): 35.0, frozenset("bc"): 7.0, frozenset("abc"): 2.0}
-    sel = _Given(held, refits={frozenset("b"): 16.0, frozenset("bc"): 2.05})
-    final, _, _, order, pruned, rounds = sel.select([a, b, c], _fit(100.0), BAND)
-    assert pruned == ["a", "a"] and final.names == ["b", "c"] and final.chi2 == 2.05 and order == ["b", "c"]
-    assert [r["chosen"] for r in rounds] == ["a", "b", "c", "a"]
-
-
-def test_an_effect_negligible_on_all_data_is_dropped_on_entry_and_no_round_is_fitted_beside_it():
-    """A tachometer takes 75 % of the base's excess in the folds, but fitted on all data its size
-    is negligible (the independent plant's 6-pole direct start with leakage saturation: it entered
-    there, a round of eight candidates was fitted beside it, and the backward check dropped it). It
-    is out on entry: the next round, from the same set, fits the others only; the load earns there."""
-    held = {frozenset(): 5.0, frozenset({GAIN.name}): 2.0, frozenset({LOAD.name}): 2.9,
-            frozenset({TWO.name}): 4.0, frozenset({LOAD.name, TWO.name}): 2.8}
-    sel = _Given(held, negligible={GAIN.name})
-    final, _, _, order, pruned, rounds = sel.select([GAIN, LOAD, TWO], _fit(5.0), BAND)
-    assert order == ["load_torque"] and pruned == [] and final.chi2 == 2.9
-    assert rounds[0]["refused"]["effect"] == "speed_sensor_gain" and rounds[0]["chosen"] is None
-    assert rounds[1]["chosen"] == "load_torque" and rounds[1]["from"] == []
-    assert not any(GAIN.name in names and len(names) > 1 for names in sel.fitted)  # nothing beside it
-
-
-def test_a_member_of_a_pair_refused_on_entry_leaves_and_no_round_is_fitted_beside_the_pair():
-    """The held-out plant's seed 430 set 11 (an eddy-current brake): beside the load, an iron loss
-    and a tachometer entered as a pair (41 % and 37 % of what the load's form left), a round and a
-    pair step of 21 pairs were fitted beside the three (233 s), and only then did the backward check
-    refuse the iron loss, negligible on all data. A pair's members are checked on entry as a single
-    is: the refused one leaves, the round starts again from the same set without it."""
-    held = {frozenset(): 1000.0, frozenset({LOAD.name}): 970.0, frozenset({GAIN.name}): 880.0,
-            frozenset({SKEW.name}): 995.0, frozenset({LOAD.name, GAIN.name}): 140.0,
-            frozenset({LOAD.name, SKEW.name}): 960.0, frozenset({GAIN.name, SKEW.name}): 870.0,
-            frozenset({LOAD.name, GAIN.name, SKEW.name}): 139.0}
-    sel = _Given(held, negligible={GAIN.name})
-    final, _, _, order, pruned, rounds = sel.select([LOAD, GAIN, SKEW], _fit(1000.0), BAND)
-    assert order == [] and pruned == [] and final.chi2 == 1000.0  # the gain's pair out, the skew's earns nothing
-    refused = [r for r in rounds if "refused" in r]
-    assert len(refused) == 1 and refused[0]["pairs"] and refused[0]["chosen"] is None
-    assert refused[0]["refused"] == {"effect": GAIN.name, "why": "negligible", "pair": "load_torque+speed_sensor_gain"}
-    assert not any(len(names) > 2 for names in sel.fitted)  # nothing fitted beside the pair
-    after = rounds[rounds.index(refused[0]) + 1:]
-    assert after and all(GAIN.name not in r["from"] for r in after)
-    assert not any(GAIN.name in c["effect"] for r in after for c in r["candidates"])
-    # without the refusal the pair enters (the test above's record)
-    sel = _Given(held)
-    final, *_ = sel.select([LOAD, GAIN, SKEW], _fit(1000.0), BAND)
-    assert set(final.names) == {LOAD.name, GAIN.name}
+    assert Given(held).forward([LOAD, GAIN], given_fit(1.2), BAND, order, []).chi2 == 1.2 and order == []
+    capped = Given(held, settings=DiagnosisSettings(max_effects=0))
+    assert capped.forward([LOAD, GAIN], given_fit(50.0), BAND, order, []).chi2 == 50.0
 
 
 def test_a_coulomb_friction_far_above_a_motors_own_is_reported_as_a_constant_load():
