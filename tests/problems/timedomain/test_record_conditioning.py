@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benchmark.problems.timedomain.probe_clipping import detect_clipping
 from benchmark.problems.timedomain.record_conditioning import (
     check_speed_gain,
     condition_record,
-    detect_clipping,
     detect_switch_on,
     estimate_frequency,
     estimate_offsets,
