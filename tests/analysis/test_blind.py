@@ -363,7 +363,6 @@ def test_a_set_that_raises_is_kept_as_a_row_the_draw_goes_on_and_resume_tries_it
     and a resumed run makes and diagnoses only the failed sets again. A mistyped diagnosis key is
     the run's mistake: it stops before any set."""
     import dataclasses
-    import json
     from pathlib import Path
 
     from hydra import compose, initialize_config_dir
@@ -443,23 +442,3 @@ def test_false_selections_and_channel_delay_are_counted_by_the_rules_names():
     assert s["scored"] == 5 and s["false_selection_sets"] == 1
     assert s["channel_delay_not_injected"] == 5 and s["channel_delay_named"] == 2
     assert s["names_wrong"] == 1 and s["names_right"] == 4
-
-
-def test_pooled_draws_are_scored_as_one_set_of_rows(tmp_path, capsys):
-    from benchmark.analysis import blind_pool
-
-    a = [_row(0, [], "no_gap", [], gap=1.0), _row(1, ["double_cage"], "explained", ["double_cage"])]
-    b = [_row(0, [], "explained", ["iron_loss"]), _row(1, ["iron_loss", "two_mass"], "explained", ["two_mass"])]
-    for name, rows in (("d1", a), ("d2", b)):
-        (tmp_path / name / "plant").mkdir(parents=True)
-        (tmp_path / name / "plant" / "blind.json").write_text(json.dumps({"sets": rows}))
-    pooled = blind_pool.pooled([tmp_path / "d1", tmp_path / "d2"])
-    assert list(pooled) == ["plant"]
-    s = pooled["plant"]
-    assert (s["effect_sets_exact"], s["effect_sets"], s["false_alarms"], s["effect_free_sets"]) == (1, 2, 1, 2)
-    assert (s["both_named"], s["two_effect_sets"], s["false_selection_sets"], s["scored"]) == (0, 1, 1, 4)
-    blind_pool.main([str(tmp_path / "d1"), str(tmp_path / "d2")])
-    out = capsys.readouterr().out
-    assert "| plant | 1/2, 50 % (9-91 %) | 1/2, 50 % (9-91 %) | 0/1, 0 % (0-79 %) | 1/4, 25 % (5-70 %) |" in out
-    with pytest.raises(SystemExit, match="no SOURCE/blind.json"):
-        blind_pool.main([str(tmp_path)])

@@ -37,11 +37,12 @@ What it measures, all in one run (so ratios compare like with like on a shared m
 6. **Identification end to end**: ``benchmark.core.harness.run`` with ``+experiment=table1`` (60000
    GENESIS trials) in a fresh interpreter, wall time from process start to exit, cold cache
    (compile included) and warm cache, on 2 threads (and warm on 1 thread).
-7. **Diagnosis**: ``python -m benchmark.diagnose data.path=DIR`` of the twelve records of
+7. **Diagnosis**: ``python -m benchmark.diagnose data.path=DIR`` of the fourteen records of
    :mod:`.diagnosis_records` (three sources; DOL, six-step and PWM starts; with and without a
-   stop record; 1 to 7.5 kW, 2 to 6 poles), each in a fresh interpreter with a warm cache; with
-   ``reference=DIR`` (an earlier checkout) the reference diagnoses each record right before, and
-   the report checks the verdicts against it (:mod:`.diagnosis_report`).
+   stop record; 1 to 7.5 kW, 2 to 6 poles; the last two a load the catalogue has no form for),
+   each in a fresh interpreter with a warm cache; with ``reference=DIR`` (an earlier checkout)
+   the reference diagnoses each record right before, and the report checks the verdicts against
+   it (:mod:`.diagnosis_report`).
 
 Timings are the best of several repeats, interleaved across the configurations so that load
 from other processes spreads over all of them; the load average is recorded.
@@ -360,7 +361,7 @@ def main(argv=None) -> int:
     ident = section_identification(quick)
     for name, (rec, wall) in ident["runs"].items():
         say(f"  {name}: {wall:.2f} s wall, {rec['evaluations']} evaluations")
-    say("diagnoses of the twelve records (fresh interpreters, warm caches)")
+    say("diagnoses of the perf records (fresh interpreters, warm caches)")
     diag = section_diagnosis(opts["reference"], say=lambda s: say("  " + s))
     load1 = os.getloadavg()[0]
     text = report(m, thr, ref, scal, adm, comp, ident, opts, started, load0, load1, time.perf_counter() - t_start,

@@ -1,4 +1,4 @@
-"""The records of the perf study's diagnosis section: twelve data sets from the three sources.
+"""The records of the perf study's diagnosis section: fourteen data sets from the three sources.
 
 Each record is written by its own source's generator in a subprocess (the project's plant
 ``python -m synthetic``, the independent plant ``python -m synthetic.independent``, motulator
@@ -6,7 +6,10 @@ Each record is written by its own source's generator in a subprocess (the projec
 the same on every machine. Together they cover direct-on-line, six-step and PWM starts, with
 and without a stop record, 1 to 7.5 kW, 2 to 6 poles, no effect to two effects at once; the
 first is the issue's slow case (0.8 s at 12 kHz of the independent plant's 1 kW motor on a
-six-step start, probes that saturate softly and a flexible coupling, a 10 s stop at 1 kHz).
+six-step start, probes that saturate softly and a flexible coupling, a 10 s stop at 1 kHz); the
+last two are the kind the blind draws found slowest, a load in a form the catalogue lacks (a
+battery charger), on the independent plant's 6-pole motor and on motulator's 2.2 kW motor (its
+stop 24 s long: the charger brakes it only above its cut-in speed).
 
     python -m benchmark.studies.perf.diagnosis_records DIR      # writes DIR/<name>/ for each record
 """
@@ -53,6 +56,15 @@ RECORDS = (
                   "load_torque": {"form": "quadratic", "size": 0.4}}, "seed": 9, "stop": True}),
     ("motulator_1kw_pwm_none_nostop", "motulator",
      {"motor": "preset", "scenario": "pwm", "effects": None, "seed": 10, "stop": False}),
+    # the slow kind the blind draws show: a load in a form the catalogue lacks (a battery charger
+    # cutting in above a speed), whose fits carry the load's eight parameters into every round
+    ("plant_6pole_sixstep_charger", "plant",
+     "--motor fitzgerald_6pole --scenario six_step --effects load_torque --forms load_torque=battery_charger "
+     "--seed 11 --duration 1.0 --stop 10"),
+    ("motulator_2k2_sixstep_charger", "motulator",
+     {"motor": "motulator_2p2kw", "scenario": "six_step",
+      "effects": {"load_torque": {"form": "battery_charger", "time": 0.2, "cut_in_ratio": 0.4, "size": 0.5}},
+      "seed": 12, "stop": True}),
 )
 
 #: motulator's noise (the blind source's middle values) and record: 0.6 s at 12 kHz.
