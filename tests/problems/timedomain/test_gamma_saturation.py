@@ -19,7 +19,7 @@ import pytest
 
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.effects import MainSaturation
-from tests.problems.timedomain.test_effects import _excess, _JointFit
+from tests.problems.timedomain.test_effects_independent_plant import _excess, _JointFit
 
 DURATION, RATE = 0.5, 5000.0
 SATURATION = {"size": 0.39, "exponent": 7.0}  # motulator's example: L_su 0.34 H, beta 0.84 /Wb, S 7 at 400 V

@@ -16,7 +16,7 @@ import numpy as np
 from benchmark.core.effects import load_effects
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.extended import IDX, base_rows, simulate_extended_batch
-from tests.problems.timedomain.test_effects import DURATION, RATE, _excess, _floor, _JointFit
+from tests.problems.timedomain.test_effects_independent_plant import DURATION, RATE, _excess, _floor, _JointFit
 
 EFFECTS = load_effects("timedomain")
 
