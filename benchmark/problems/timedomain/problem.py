@@ -17,14 +17,11 @@ they then come from the start-up alone).
 
 from __future__ import annotations
 
-import math
 import warnings
-from pathlib import Path
 
 import numpy as np
-import yaml
 
-from benchmark.core.errors import ConfigError, DataError, ImbenchWarning
+from benchmark.core.errors import ConfigError, ImbenchWarning
 from benchmark.core.problem import Problem
 from benchmark.problems.timedomain.bounds import (  # noqa: F401  (check_config: the harness's hook)
     check_config,
@@ -42,6 +39,10 @@ from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cos
 from benchmark.problems.timedomain.speed_filter import UnstatedFilter, speed_read_through, unstated_filter
 from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
+from benchmark.problems.timedomain.truth_file import (  # noqa: F401 (stored run configurations name them here)
+    read_truth_document,
+    read_truth_for_scoring,
+)
 
 
 class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
@@ -447,37 +448,3 @@ def condition(ds: StartupDataset, speed_filter: bool) -> StartupDataset:
 
     return replace(ds, startups=[replace(r, speed=zero_phase_lowpass(r.speed, ds.sample_time))
                                  for r in ds.startups])
-
-
-def read_truth_for_scoring(folder) -> dict | None:
-    """The true parameters of a synthetic data set, read only to score errors.
-
-    A malformed truth.yaml only costs the scoring: it raises DataError naming the file, since
-    a user who put it there expects errors to be scored."""
-    path = Path(folder) / "truth.yaml"
-    if not path.is_file():
-        return None
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
-    except (yaml.YAMLError, UnicodeDecodeError, ValueError, RecursionError) as exc:
-        raise DataError(path, f"not valid YAML: {str(exc).splitlines()[0]}") from None
-    params = doc.get("parameters") if isinstance(doc, dict) else None
-    if not isinstance(params, dict):
-        raise DataError(path, "needs a mapping 'parameters' of true values (or remove the file)")
-    out = {}
-    for k, v in params.items():
-        if k not in PARAMETER_NAMES:
-            continue
-        try:
-            value = float(v)
-        except (TypeError, ValueError):
-            raise DataError(path, f"parameters.{k} must be a number, got {v!r}") from None
-        if math.isfinite(value):
-            out[k] = value
-    return out
-
-
-def read_truth_document(folder) -> dict | None:
-    """``{"parameters": ...}`` of a synthetic data set's truth.yaml, or None (scoring only)."""
-    params = read_truth_for_scoring(folder)
-    return None if params is None else {"parameters": params}
