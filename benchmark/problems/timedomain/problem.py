@@ -39,7 +39,7 @@ from benchmark.problems.timedomain.simulation import hold_is_linear, startup_cos
 from benchmark.problems.timedomain.speed_filter import UnstatedFilter, speed_read_through, unstated_filter
 from benchmark.problems.timedomain.stator_prior import DEFAULT_SPREAD_K, StatorPriorTerms
 from benchmark.problems.timedomain.switch_on_flux import SwitchOnFlux
-from benchmark.problems.timedomain.truth_file import (  # noqa: F401 (stored run configurations name them here)
+from benchmark.problems.timedomain.true_parameters import (  # noqa: F401 (stored run configurations name them here)
     read_truth_document,
     read_truth_for_scoring,
 )

@@ -125,7 +125,7 @@ def test_truth_yaml_written_by_generator(tmp_path):
     ("parameters:\n  Rs: abc\n", "parameters.Rs must be a number"),
 ])
 def test_malformed_truth_yaml_is_a_clear_data_error(tmp_path, text, expected):
-    from benchmark.problems.timedomain.truth_file import read_truth_for_scoring
+    from benchmark.problems.timedomain.true_parameters import read_truth_for_scoring
 
     (tmp_path / "truth.yaml").write_bytes(text.encode())
     with pytest.raises(DataError) as err:
