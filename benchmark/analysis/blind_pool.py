@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmark.analysis.blind_report import summarise
+from benchmark.studies.perf.diagnosis_report import TARGET_S
 
 
 def scored_sets(folders: list[Path]) -> dict[str, list[dict]]:
@@ -41,18 +42,14 @@ def pooled(folders: list[Path]) -> dict[str, dict]:
     return {source: summarise(sets) for source, sets in scored_sets(folders).items()}
 
 
-#: Seconds a diagnosis may take (the project's target for a record up to 1 s at 12 kHz with a 10 s stop).
-TARGET_S = 60.0
-
-
-def wall_times(folders: list[Path]) -> dict[str, dict]:
-    """The wall times (s) of the diagnoses the draws in ``folders`` recorded, per source and kind
+def wall_times(rows: dict[str, list[dict]]) -> dict[str, dict]:
+    """The wall times (s) of the diagnoses the draws recorded (``rows``: :func:`scored_sets`), per source and kind
     of set (keys ``"SOURCE, effect sets"`` and ``"SOURCE, effect-free sets"``; an effect-free set
     whose gap is at the noise level ends after its base identification): ``sets`` timed,
     ``median``, ``p90`` (90th percentile), ``max``, ``over_target`` (sets above :data:`TARGET_S`)
     and ``slowest`` (the injected effects of the slowest set, ``none`` if none)."""
     out = {}
-    for source, sets in scored_sets(folders).items():
+    for source, sets in rows.items():
         for kind, chosen in (("effect sets", [s for s in sets if s.get("truth_effects")]),
                              ("effect-free sets", [s for s in sets if not s.get("truth_effects")])):
             timed = [s for s in chosen if s.get("wall_time_s") is not None]
@@ -101,10 +98,10 @@ def main(argv: list[str]) -> None:
     if not argv:
         raise SystemExit("usage: python -m benchmark.analysis.blind_pool OUT_FOLDER [OUT_FOLDER ...]")
     try:
-        folders = [Path(a) for a in argv]
-        print(table(pooled(folders)))
+        rows = scored_sets([Path(a) for a in argv])
+        print(table({source: summarise(sets) for source, sets in rows.items()}))
         print("Wall time of each diagnosis, as the draws recorded it:\n")
-        print(time_table(wall_times(folders)), end="")
+        print(time_table(wall_times(rows)), end="")
     except FileNotFoundError as err:
         raise SystemExit(f"error: {err}") from None
 

@@ -36,7 +36,7 @@ def test_pooled_draws_are_scored_as_one_set_of_rows(tmp_path, capsys):
 
 
 def test_wall_times_are_given_per_source_and_kind_of_set_with_the_slowest_set(tmp_path, capsys):
-    times = blind_pool.wall_times(_draws(tmp_path))
+    times = blind_pool.wall_times(blind_pool.scored_sets(_draws(tmp_path)))
     assert list(times) == ["plant, effect sets", "plant, effect-free sets"]
     with_effects, free = times["plant, effect sets"], times["plant, effect-free sets"]
     assert (with_effects["sets"], with_effects["median"], with_effects["max"]) == (2, 140.0, 250.0)
