@@ -43,13 +43,14 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import (
-    condition_record,
-    estimate_offsets,
+from benchmark.problems.timedomain.record_conditioning import condition_record, estimate_offsets
+from benchmark.problems.timedomain.switch_on import (
+    SwitchingSteps,
     has_pretrigger,
     pretrigger_segment,
+    sampled_volt_seconds,
+    switching_steps,
 )
-from benchmark.problems.timedomain.switch_on import SwitchingSteps, sampled_volt_seconds, switching_steps
 
 #: Key of ``StartupRecord.removed`` holding the pre-trigger samples the offsets were measured on.
 AT_REST = "sensor_offset_at_rest"

@@ -6,8 +6,10 @@ the diagnosis (:mod:`benchmark.problems.timedomain.diagnosis.fit`) both call
 :func:`startup_noise`; change it here and both change.
 
 Where the record has a pre-trigger (samples before the supply is switched on: voltage and
-current at rest), every channel's noise is the spread of that quiet segment
-(:func:`benchmark.core.noise_estimates.noise_from_quiet`, unbiased for AR(1) noise). Otherwise:
+current at rest, :func:`quiet_pre_trigger_length`), every channel's noise is the spread of that
+quiet segment (:func:`benchmark.core.noise_estimates.noise_from_quiet`, unbiased for AR(1)
+noise). The conditioning trims a pre-trigger to a few samples on load, so only records read with
+``conditioning: false`` keep one. Otherwise:
 
 * currents: the end of the start-up, least-squares fitted by the supply's harmonics, each
   with an amplitude that may still drift as a quadratic in time
@@ -50,13 +52,12 @@ from benchmark.core.noise_estimates import (
     noise_from_smooth,
     refine_frequency,
 )
-from benchmark.problems.timedomain.frames import phasor_speed
+from benchmark.problems.timedomain.frames import inverse_clarke, phasor_speed
 from benchmark.problems.timedomain.speed_filter import filter_pole
+from benchmark.problems.timedomain.switch_on import find_pretrigger, pretrigger_segment
 
 #: Fallback relative uncertainty of the fourth-difference estimate.
 FALLBACK_REL_UNCERTAINTY = 0.2
-#: A pre-trigger needs at least this many samples.
-MIN_QUIET = 48
 #: The noise of a current is at least this share of its peak (a noise-free synthetic record:
 #: a 14-bit converter's resolution; below it no record is measured).
 NOISE_FREE_FLOOR = 1e-4
@@ -275,16 +276,6 @@ def residual_share(n: int, om: np.ndarray, order: int) -> np.ndarray:
     return np.clip(1.0 - lev, 0.0, 1.0)
 
 
-def pre_trigger_length(v_alpha: np.ndarray, v_beta: np.ndarray, i_alpha: np.ndarray, i_beta: np.ndarray) -> int:
-    """Samples before the supply is switched on: voltage below 5 % of its peak and the current
-    not yet risen above 5 % of its peak (0 when the record starts energised)."""
-    v = np.hypot(v_alpha, v_beta)
-    i = np.hypot(i_alpha, i_beta)
-    on = np.flatnonzero((v > 0.05 * np.max(v)) | (i > 0.05 * np.max(i)))
-    k = int(on[0]) if len(on) else 0
-    return max(k - 2, 0)
-
-
 #: A pre-trigger is quiet when no current's spread exceeds this many times its white part.
 QUIET_SIGNAL_RATIO = 4.0
 
@@ -302,11 +293,18 @@ def quiet(*currents: np.ndarray) -> bool:
     return True
 
 
-def quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta) -> int:
-    """:func:`pre_trigger_length` when that stretch is :func:`quiet` and at least
-    :data:`MIN_QUIET` long, else 0 (no pre-trigger to take the noise from)."""
-    k = pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
-    return k if k >= MIN_QUIET and quiet(i_alpha[:k], i_beta[:k]) else 0
+def quiet_pre_trigger_length(t, v_alpha, v_beta, i_alpha, i_beta) -> int:
+    """Samples of the record's pre-trigger (:func:`~benchmark.problems.timedomain.switch_on.find_pretrigger`,
+    the one the conditioning reads: at least :data:`~benchmark.problems.timedomain.switch_on.MIN_PRETRIGGER`
+    before the switch-on less its guard) when that stretch is :func:`quiet`, else 0 (no pre-trigger
+    to take the noise from). The conditioning trims a pre-trigger to a few samples before the
+    noise is estimated: only a record read with ``conditioning: false`` keeps one."""
+    ts = float(np.median(np.diff(t)))
+    k_on, _ = find_pretrigger(np.vstack(inverse_clarke(v_alpha, v_beta)), np.vstack([i_alpha, i_beta]), ts)
+    seg = pretrigger_segment(np.asarray(i_alpha), k_on)
+    if seg is None or not quiet(seg, pretrigger_segment(np.asarray(i_beta), k_on)):
+        return 0
+    return len(seg)
 
 
 def _departures(speed: np.ndarray, n: int, period: int) -> np.ndarray:
@@ -379,11 +377,11 @@ def startup_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed, supply_frequency: 
     has_speed = speed is not None and bool(np.all(np.isfinite(speed)))
     i_floor = NOISE_FREE_FLOOR * float(np.max(np.abs(np.concatenate([i_alpha, i_beta]))))
     out: dict[str, NoiseEstimate] = {}
-    k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    k_quiet = quiet_pre_trigger_length(t, v_alpha, v_beta, i_alpha, i_beta)
     chans = {"i_alpha": i_alpha, "i_beta": i_beta}
     if has_speed:
         chans["speed"] = speed
-    if k_quiet >= MIN_QUIET:
+    if k_quiet:
         for ch, x in chans.items():
             floor = i_floor if ch != "speed" else SPEED_NOISE_FREE_FLOOR * float(np.max(np.abs(speed)))
             try:

@@ -25,17 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmark.problems.timedomain.probe_clipping import detect_clipping
-from benchmark.problems.timedomain.switch_on import (
-    REST_GUARD_S,
-    current_departure,
-    detect_switch_on,
-    voltage_live_from_start,
-    voltage_rises_before,
-)
-
-MIN_PRETRIGGER = 50  #: samples a pre-trigger needs before its mean is used as the offset
-#: samples left out before the switch-on when a pre-trigger's mean is taken (the contactor's first arcs)
-PRETRIGGER_GUARD = 3
+from benchmark.problems.timedomain.switch_on import PRETRIGGER_GUARD, find_pretrigger, pretrigger_segment
 
 
 def estimate_frequency(x, ts: float, tail_s: float | None = None) -> float:
@@ -103,20 +93,6 @@ def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
     return float(max(math.sqrt(L * np.var(means, ddof=1)), np.std(e)))
 
 
-def has_pretrigger(pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> bool:
-    """Whether a switch-on at sample ``pretrigger_end`` leaves at least :data:`MIN_PRETRIGGER`
-    samples before it less ``guard``: a pre-trigger whose mean is the offset."""
-    return pretrigger_end is not None and pretrigger_end - guard >= MIN_PRETRIGGER
-
-
-def pretrigger_segment(x, pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> np.ndarray | None:
-    """The samples of ``x`` before a switch-on at ``pretrigger_end`` less ``guard``, when there
-    are at least :data:`MIN_PRETRIGGER` of them (the segment whose mean is the offset), else None."""
-    if not has_pretrigger(pretrigger_end, guard):
-        return None
-    return np.asarray(x)[..., :pretrigger_end - guard]
-
-
 def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None, *,
                      tail_s: float | None = None, n_harmonics: int = 7, guard: int = PRETRIGGER_GUARD,
                      mask=None, f0_from=None) -> tuple[float, str, float]:
@@ -125,7 +101,7 @@ def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None,
     taken from the steady tail's residual where there is one (a pre-trigger of a few ms is too
     short to show a slow drift, which it cannot tell from an offset) and from the segment itself.
 
-    * pre-trigger (``pretrigger_end - guard >= 50`` samples): their mean. The channel is truly
+    * pre-trigger (``pretrigger_end - guard >= MIN_PRETRIGGER`` samples, 50): their mean. The channel is truly
       zero there (motor at rest, supply off); accuracy ``long_run_std / sqrt(N)`` (0.02 V for
       0.5 V white noise and 500 samples). A drift between pre-trigger and run is not seen.
     * else the steady tail (last ``tail_s`` s, default the last third, trimmed to a whole
@@ -328,22 +304,8 @@ def condition_record(v, i, ts: float, speed=None, *, f0: float | None = None, p:
         f0, f0_source = estimate_frequency(v[0], ts, tail_s), "from zero crossings of v_r"
     else:
         f0_source = "given"
-    k_on = detect_switch_on(v, ts)
-    k_rest = current_departure(i, ts, k_on)
-    if k_rest is not None and k_rest < k_on - max(3, round(REST_GUARD_S / ts)):
-        # current flows well before the voltage's switch-on: the voltage was live (if low) from the start
-        notes.append(f"currents leave their rest level at t = {k_rest * ts:.4f} s, before the voltage's "
-                     f"switch-on at {k_on * ts:.4f} s (a live low voltage, e.g. a V/f boost): no pre-trigger")
-        k_on = None
-    elif voltage_rises_before(v, k_on):
-        notes.append(f"the voltage's magnitude rises steadily before its switch-on at {k_on * ts:.4f} s (a live "
-                     f"low voltage, e.g. a V/f ramp from a boost voltage): no pre-trigger")
-        k_on = None
-    elif voltage_live_from_start(v, k_on, k_rest):
-        notes.append(f"the voltage before its switch-on at {k_on * ts:.4f} s is already near its magnitude there "
-                     f"and the currents move before it (a live low voltage from the first sample, e.g. a V/f "
-                     f"boost just under the contact level): no pre-trigger")
-        k_on = None
+    k_on, said = find_pretrigger(v, i, ts)
+    notes.extend(said)
     hard = [detect_clipping(x, clip_rel_tol) for x in i]
     masks = [detect_clipping(x, clip_rel_tol, ts=ts, f0=f0, start=k_on or 0) if soft else h
              for x, h in zip(i, hard, strict=True)]

@@ -2,7 +2,9 @@
 
 * :func:`detect_switch_on`: the first contact of the first sustained energisation;
   :func:`current_departure`: whether the currents are at rest before it (else the voltage
-  was live, if low, from the start: no pre-trigger).
+  was live, if low, from the start: no pre-trigger); :func:`find_pretrigger`: the two together,
+  the one pre-trigger of a record that the conditioning and the noise estimate both read
+  (:func:`pretrigger_segment`: its samples, at least :data:`MIN_PRETRIGGER` of them).
 
 * :func:`switching_steps`: voltage steps between two samples (contactor poles closing, arcs
   ending) put volt-seconds the model's interpolation between samples gets wrong; they are
@@ -202,6 +204,57 @@ def voltage_live_from_start(v_phases, k_on: int | None, k_rest: int | None) -> b
     if not float(np.median(m[:k_on])) >= LIVE_SHARE_OF_CONTACT * float(m[k_on]):
         return False
     return k_rest is not None and k_rest < k_on - 3
+
+
+#: Samples a pre-trigger needs, less its guard, to be one: the stretch whose mean is a channel's
+#: offset (:mod:`.record_conditioning`) and whose spread is its noise (:mod:`.noise`).
+MIN_PRETRIGGER = 50
+#: Samples left out before the switch-on when a pre-trigger is used (the contactor's first arcs).
+PRETRIGGER_GUARD = 3
+
+
+def find_pretrigger(v_phases, i, ts: float) -> tuple[int | None, list[str]]:
+    """The switch-on that ends a record's pre-trigger (:func:`detect_switch_on`), or None where
+    the record starts energised, with a note for each reason a found switch-on is no pre-trigger's
+    end: the currents leave their rest level well before it (:func:`current_departure`), the
+    voltage rises through the stretch (:func:`voltage_rises_before`) or is live from the first
+    sample (:func:`voltage_live_from_start`); each is a live low voltage, e.g. an inverter's V/f
+    boost. The one switch-on of a record: the conditioning trims by it and takes its offsets
+    there, the noise estimate its quiet segment.
+
+    ``v_phases`` (3, n) V.  ``i`` (2, n) currents in A (two phases or alpha-beta).  ``ts`` s."""
+    notes: list[str] = []
+    k_on = detect_switch_on(v_phases, ts)
+    k_rest = current_departure(i, ts, k_on)
+    if k_rest is not None and k_rest < k_on - max(3, round(REST_GUARD_S / ts)):
+        # current flows well before the voltage's switch-on: the voltage was live (if low) from the start
+        notes.append(f"currents leave their rest level at t = {k_rest * ts:.4f} s, before the voltage's "
+                     f"switch-on at {k_on * ts:.4f} s (a live low voltage, e.g. a V/f boost): no pre-trigger")
+        k_on = None
+    elif voltage_rises_before(v_phases, k_on):
+        notes.append(f"the voltage's magnitude rises steadily before its switch-on at {k_on * ts:.4f} s (a live "
+                     f"low voltage, e.g. a V/f ramp from a boost voltage): no pre-trigger")
+        k_on = None
+    elif voltage_live_from_start(v_phases, k_on, k_rest):
+        notes.append(f"the voltage before its switch-on at {k_on * ts:.4f} s is already near its magnitude there "
+                     f"and the currents move before it (a live low voltage from the first sample, e.g. a V/f "
+                     f"boost just under the contact level): no pre-trigger")
+        k_on = None
+    return k_on, notes
+
+
+def has_pretrigger(pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> bool:
+    """Whether a switch-on at sample ``pretrigger_end`` leaves at least :data:`MIN_PRETRIGGER`
+    samples before it less ``guard``: a pre-trigger."""
+    return pretrigger_end is not None and pretrigger_end - guard >= MIN_PRETRIGGER
+
+
+def pretrigger_segment(x, pretrigger_end: int | None, guard: int = PRETRIGGER_GUARD) -> np.ndarray | None:
+    """The samples of ``x`` before a switch-on at ``pretrigger_end`` less ``guard``, when there
+    are at least :data:`MIN_PRETRIGGER` of them (the pre-trigger), else None."""
+    if not has_pretrigger(pretrigger_end, guard):
+        return None
+    return np.asarray(x)[..., :pretrigger_end - guard]
 
 
 #: A change of the voltage space vector between two samples that departs from the smooth change

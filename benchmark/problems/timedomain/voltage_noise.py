@@ -32,7 +32,6 @@ import numpy as np
 
 from benchmark.core.noise_estimates import NoiseEstimate
 from benchmark.problems.timedomain.noise import (
-    MIN_QUIET,
     fallback,
     floored,
     modulated_periodic_noise,
@@ -61,7 +60,7 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
     fs = 1.0 / float(np.median(np.diff(t)))
     v_floor = 1e-5 * float(np.max(np.hypot(v_alpha, v_beta)))
     chans = {"v_alpha": np.asarray(v_alpha, float), "v_beta": np.asarray(v_beta, float)}
-    k_quiet = quiet_pre_trigger_length(v_alpha, v_beta, i_alpha, i_beta)
+    k_quiet = quiet_pre_trigger_length(t, v_alpha, v_beta, i_alpha, i_beta)
     out: dict[str, NoiseEstimate] = {}
     templates: dict[str, np.ndarray] = {}
     shares: dict[str, np.ndarray] = {}
@@ -69,7 +68,7 @@ def voltage_noise(t, v_alpha, v_beta, i_alpha, i_beta, speed,
     k_ss = steady_start(speed if has_speed else None, n, max(int(fs / supply_frequency), 1))
     for ch, x in chans.items():
         try:
-            if k_quiet >= MIN_QUIET:
+            if k_quiet:
                 out[ch] = floored(noise_from_quiet(x[:k_quiet]), x[:k_quiet], v_floor)
                 templates[ch] = x[:k_quiet] - np.mean(x[:k_quiet])
                 continue

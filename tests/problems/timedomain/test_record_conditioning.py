@@ -9,10 +9,10 @@ from benchmark.problems.timedomain.probe_clipping import detect_clipping
 from benchmark.problems.timedomain.record_conditioning import (
     check_speed_gain,
     condition_record,
-    detect_switch_on,
     estimate_frequency,
     estimate_offsets,
 )
+from benchmark.problems.timedomain.switch_on import detect_switch_on
 
 TS, F0, P, N = 1e-4, 50.0, 2, 10_000
 K_ON = 1034  # first contact; the contacts bounce open twice in the next millisecond
@@ -350,7 +350,7 @@ def test_one_rule_says_whether_a_record_has_a_pre_trigger():
     from benchmark.problems.timedomain.conditioning import condition_startup
     from benchmark.problems.timedomain.data import StartupRecord
     from benchmark.problems.timedomain.frames import clarke
-    from benchmark.problems.timedomain.record_conditioning import MIN_PRETRIGGER, PRETRIGGER_GUARD
+    from benchmark.problems.timedomain.switch_on import MIN_PRETRIGGER, PRETRIGGER_GUARD
 
     v, i, _, speed = record(seed=6)
     first = MIN_PRETRIGGER + PRETRIGGER_GUARD  # the first switch-on with a pre-trigger

@@ -13,8 +13,7 @@ import yaml
 
 from benchmark.problems.timedomain.data import load_startup_dataset
 from benchmark.problems.timedomain.problem import TimeDomainProblem
-from benchmark.problems.timedomain.record_conditioning import detect_switch_on
-from benchmark.problems.timedomain.switch_on import sampled_volt_seconds, switching_steps
+from benchmark.problems.timedomain.switch_on import detect_switch_on, sampled_volt_seconds, switching_steps
 from synthetic.independent import make_dataset, make_spec, write_dataset
 from synthetic.independent.motors import get_motor
 
