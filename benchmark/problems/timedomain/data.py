@@ -258,7 +258,8 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         check_mapping_columns(meta_path, skew, rec.columns)
     stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
     _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
-    check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"))
+    check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"),
+                  optional.get("stator_dc_resistance"))
     ds = StartupDataset(
         pole_pairs=p,
         sample_time=ts,

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -54,6 +55,15 @@ J_TYPICAL, J_EXPONENT = 0.005, 1.25
 #: ... and the energy bound on J (``2 E_in / w^2``: losses and a coupled load included) is
 #: suspect beyond this factor of it either way.
 J_RATIO_PLAUSIBLE = 1000.0
+#: Efficiency times power factor of a motor at its rated point: a nameplate without a current
+#: bounds it by ``P / (sqrt(3) V x)`` over this range (small motors 0.5, large ones up to 0.85).
+RATED_EFFICIENCY_POWER_FACTOR = (0.3, 0.9)
+#: The stator's copper loss at ``stator_dc_resistance`` over a start-up record may reach this many
+#: times the electrical energy the record takes in before the data are refused. Physics allows 1
+#: (the copper loss is part of what goes in; on 57 synthetic records of the three sources and
+#: the example it was 0.15-0.74): the margin holds a winding measured hot and started cold and a
+#: delta winding's phase resistance given for its star equivalent (3 times it).
+RS_ENERGY_RATIO_POSSIBLE = 5.0
 #: An inverter's voltage holds its level: at least this share of samples repeat the one before.
 HELD_SHARE = 0.5
 #: ... on at most this many distinct levels per channel.
@@ -101,12 +111,11 @@ def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
         _check_reversed_probe(rec, v, i, t, w_e, icols, fwd, bwd)
         return  # no clear sequence in the currents (a record that ends stopped): nothing to compare
     if np.sign(w_e) != i_sign:
-        swap = ("swap the columns v_s and v_t" if "v_r" in vcols else "negate v_beta")
+        swap = _sequence_fix(rec, i, t, vcols, icols) if "v_r" in vcols else "negate v_beta"
         raise DataError(rec.source, f"the voltage ({vcols}) and current ({icols}) phase sequences disagree: the "
                                     f"voltage phasor turns {'forwards' if w_e > 0 else 'backwards'}, the current "
                                     f"phasor {'forwards' if i_sign > 0 else 'backwards'}, so two phase labels are "
-                                    f"swapped in one of them; {swap} (or the matching current columns)",
-                        column=vcols)
+                                    f"swapped in one of them; {swap}", column=vcols)
     angle = current_lag(fundamental(v, t, w_e), fundamental(i, t, w_e), w_e)
     lo, hi = PHASE_ANGLE_WINDOW
     if lo <= angle <= hi:
@@ -128,6 +137,29 @@ def check_phase_sequence(rec, pole_pairs: int | None = None) -> None:
     raise DataError(rec.source, f"the current lags the voltage by {angle:.0f} degrees, which no motor does (0 to 90): "
                                 f"the voltage and current phase labels are rotated by 120 degrees against each other; "
                                 f"{rename} (then the current lags by {fixed[k]:.0f} degrees){also}", column=vcols)
+
+
+def _sequence_fix(rec, i, t, vcols: str, icols: str) -> str:
+    """The relabelling that gives voltage and current one sequence with the current lagging by a
+    motor's angle: of the three swaps of two voltage columns (each reverses the sequence; they
+    differ by 120 degrees), the one whose lag is nearest 45 degrees. Swapping ``v_r`` and ``v_s``
+    is swapping ``i_r`` and ``i_s`` (the data cannot tell which were labelled wrong: both are named);
+    the other two have no current-column equivalent (the third current is not recorded)."""
+    tail = _tail(rec)
+    phases = dict(zip(("v_r", "v_s", "v_t"), inverse_clarke(rec.v_alpha[tail], rec.v_beta[tail]), strict=True))
+    lags = {}
+    for a, b in (("v_r", "v_s"), ("v_s", "v_t"), ("v_r", "v_t")):
+        swapped = {**phases, a: phases[b], b: phases[a]}
+        va, vb = clarke(swapped["v_r"], swapped["v_s"], swapped["v_t"])
+        v = va + 1j * vb
+        w = phasor_speed(va, vb, t)
+        lags[(a, b)] = current_lag(fundamental(v, t, w), fundamental(i, t, w), w)
+    (a, b), lag = min(lags.items(), key=lambda kv: abs(kv[1] - 45.0))
+    fix = f"swap the columns {a} and {b}"
+    if (a, b) == ("v_r", "v_s") and "i_r" in icols:
+        fix = ("swap the columns i_r and i_s, or else v_r and v_s (either gives the same record: change the pair "
+               "mislabelled)")
+    return f"{fix} (then the current lags the voltage by {lag:.0f} degrees)"
 
 
 def _check_reversed_probe(rec, v, i, t, w_e: float, icols: str, fwd: float, bwd: float) -> None:
@@ -237,12 +269,23 @@ def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
     i = rec.i_alpha[tail] + 1j * rec.i_beta[tail]
     icols = _columns(rec, "current")
     steady = settled(rec)
+    current_hint = "are the currents in A (not mA or kA), and the probe's scale right?"
     if nameplate.get("current") and abs(w_e) > 0:
         i_rms = abs(fundamental(i, t, w_e)) / math.sqrt(2.0)
         ratio = i_rms / nameplate["current"]
         _ratio_check(rec.source, icols, f"the steady-state current {i_rms:.4g} A rms", ratio, CURRENT_RATIO_PLAUSIBLE,
-                     CURRENT_RATIO_POSSIBLE, "are the currents in A (not mA or kA), and the probe's scale right?",
-                     steady)
+                     CURRENT_RATIO_POSSIBLE, current_hint, steady)
+    elif nameplate.get("rated_power") and nameplate.get("voltage") and abs(w_e) > 0:
+        # no rated current: the one a motor of this power and voltage can have (an error only)
+        i_rms = abs(fundamental(i, t, w_e)) / math.sqrt(2.0)
+        apparent = nameplate["rated_power"] / (math.sqrt(3.0) * nameplate["voltage"])
+        lo, hi = (apparent / x for x in reversed(RATED_EFFICIENCY_POWER_FACTOR))
+        ratio = i_rms / hi if i_rms > hi else i_rms / lo if i_rms < lo else 1.0
+        if ratio > CURRENT_RATIO_POSSIBLE[1] or (steady and ratio < CURRENT_RATIO_POSSIBLE[0]):
+            motor = f"{nameplate['rated_power'] / 1e3:.3g} kW, {nameplate['voltage']:.4g} V motor"
+            raise DataError(rec.source, f"the steady-state current {i_rms:.4g} A rms is {ratio:.3g} times the rated "
+                                        f"current a {motor} can have ({lo:.3g}-{hi:.3g} A rms; the nameplate "
+                                        f"states no current), which cannot be: {current_hint}", column=icols)
     if nameplate.get("voltage") and abs(w_e) > 0:
         vcols = _columns(rec, "voltage")
         v_ll = abs(fundamental(rec.v_alpha[tail] + 1j * rec.v_beta[tail], t, w_e)) * math.sqrt(1.5)
@@ -275,6 +318,30 @@ def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
                     column=icols), stacklevel=3)
 
 
+def check_stator_resistance(rec, stator_dc_resistance: float | None, meta_path) -> None:
+    """``stator_dc_resistance`` against the energy of a start-up record: the stator's copper loss
+    ``1.5 Rs sum(i_alpha^2 + i_beta^2) Ts`` is part of the electrical energy taken in,
+    ``1.5 sum(v_alpha i_alpha + v_beta i_beta) Ts``; at more than :data:`RS_ENERGY_RATIO_POSSIBLE`
+    times it the resistance and the record cannot both be right (currents in mA, voltages in kV,
+    a resistance in milliohm): a DataError naming the key and the file. Needs no nameplate."""
+    if not stator_dc_resistance or stator_dc_resistance <= 0:
+        return
+    power = 1.5 * (rec.v_alpha * rec.i_alpha + rec.v_beta * rec.i_beta)
+    copper = 1.5 * (rec.i_alpha**2 + rec.i_beta**2)
+    energy, squares = float(np.sum(power)), float(np.sum(copper))  # both times Ts: the ratio drops it
+    if not squares > 0:
+        return
+    ratio = stator_dc_resistance * squares / energy if energy > 0 else math.inf
+    if ratio > RS_ENERGY_RATIO_POSSIBLE:
+        ts = float(np.median(np.diff(rec.t)))
+        raise DataError(meta_path, f"key 'stator_dc_resistance' is {stator_dc_resistance:.4g} ohm, but at that "
+                                   f"resistance the stator's copper loss over {Path(rec.source).name} "
+                                   f"({stator_dc_resistance * squares * ts:.3g} J) would be {ratio:.3g} times the "
+                                   f"electrical energy its voltages and currents take in ({energy * ts:.3g} J), which "
+                                   "cannot be: are the currents in A (not mA), the voltages in V (not kV), and the "
+                                   "resistance the winding's ohm per phase?")
+
+
 def check_input_hold(rec, input_hold: str, meta_path) -> None:
     """Voltages held at a few levels (an inverter's switch states) while meta.yaml says ``linear``:
     a warning to set ``input_hold: zoh``."""
@@ -290,11 +357,12 @@ def check_input_hold(rec, input_hold: str, meta_path) -> None:
 
 
 def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold: str, meta_path,
-                  supply_frequency: float | None = None) -> None:
+                  supply_frequency: float | None = None, stator_dc_resistance: float | None = None) -> None:
     """Every check above on every start-up record."""
     for rec in startups:
         check_supply_frequency(rec, supply_frequency, meta_path)
         check_phase_sequence(rec, pole_pairs)
         check_speed_direction(rec, pole_pairs)
         check_scales(rec, nameplate, pole_pairs)
+        check_stator_resistance(rec, stator_dc_resistance, meta_path)
         check_input_hold(rec, input_hold, meta_path)

@@ -73,6 +73,21 @@ def test_swapped_s_and_t_voltage_labels(grid_start):
     assert "phase sequences disagree" in msg and "swap the columns v_s and v_t" in msg
 
 
+def test_swapped_current_labels_are_told_with_the_fix_that_restores_the_record(grid_start):
+    """i_r and i_s swapped: the message named the voltages' S and T, and once they were swapped as
+    told, a second error asked to rotate the voltage labels (a cold user's two rounds). The swap
+    whose current lags by a motor's angle is v_r and v_s, the same relabelling as i_r and i_s."""
+    folder = _mistake(grid_start, "swapped_currents")
+    _rename_header(folder, {"i_r": "i_s", "i_s": "i_r"})
+    msg = _error(_cli(folder))
+    assert "phase sequences disagree" in msg and "swap the columns i_r and i_s, or else v_r and v_s" in msg
+    lag = float(re.search(r"then the current lags the voltage by (-?\d+) degrees", msg).group(1))
+    _rename_header(folder, {"i_r": "i_s", "i_s": "i_r"})  # done as the message says
+    fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
+    assert np.array_equal(fixed.i_alpha, ok.i_alpha) and np.array_equal(fixed.i_beta, ok.i_beta)
+    assert 0 < lag < 90
+
+
 @pytest.mark.parametrize("labels", [("v_s", "v_t", "v_r"), ("v_t", "v_r", "v_s")])
 def test_voltage_labels_rotated_by_120_degrees_and_the_fix_it_names(grid_start, labels):
     folder = _mistake(grid_start, "rotated_" + "".join(labels))
@@ -241,3 +256,45 @@ def test_every_current_probe_reversed_is_offered_beside_the_relabelling(grid_sta
     table.to_csv(folder / "startup.csv", index=False)
     fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
     assert np.array_equal(fixed.i_alpha, ok.i_alpha) and np.array_equal(fixed.i_beta, ok.i_beta)
+
+
+def _rescaled(ok: Path, name: str, columns: list[str], factor: float, meta_edit) -> Path:
+    folder = _mistake(ok, name)
+    table = pd.read_csv(folder / "startup.csv")
+    table[columns] *= factor
+    table.to_csv(folder / "startup.csv", index=False)
+    meta = yaml.safe_load((folder / "meta.yaml").read_text())
+    meta_edit(meta)
+    (folder / "meta.yaml").write_text(yaml.safe_dump(meta))
+    return folder
+
+
+def test_currents_in_milliamperes_without_a_nameplate_current_are_told_by_the_rated_power(grid_start):
+    """A nameplate with power and voltage but no current (a cold user gave a result: Rs 0.005 ohm,
+    J at its bound): the record's steady current, 3.9 kA, is 470 times the most a 1 kW, 230 V
+    motor can have at its rated point (2.8-8.4 A; the error's bound is 20 times)."""
+    folder = _rescaled(grid_start, "milliamperes_no_current", ["i_r", "i_s"], 1000.0,
+                       lambda meta: meta["nameplate"].pop("current"))
+    msg = _error(_cli(folder))
+    assert f"{folder / 'startup.csv'}, column 'i_r, i_s'" in msg and "the nameplate states no current" in msg
+    ratio = float(re.search(r"is ([0-9.e+]+) times the rated current", msg).group(1))
+    assert 300 < ratio < 700 and "mA" in msg
+    load_startup_dataset(_rescaled(grid_start, "amperes_no_current", ["i_r", "i_s"], 1.0,
+                                   lambda meta: meta["nameplate"].pop("current")))  # the right scale loads
+
+
+@pytest.mark.parametrize(("columns", "factor"), [(["i_r", "i_s"], 1000.0), (["v_r", "v_s", "v_t"], 1e-3)])
+def test_a_scale_mistake_without_a_nameplate_is_told_by_the_stator_resistance(grid_start, columns, factor):
+    """No nameplate, but the winding's DC resistance: its copper loss would be hundreds of times the
+    energy the record takes in. At the right scale it is 0.15-0.74 of it on 57 records of the
+    three sources; a factor 1000 in the currents or the voltages puts it at about 1000 times that."""
+    def edit(meta):
+        meta.pop("nameplate")
+        meta["stator_dc_resistance"] = 5.0  # the plant's 1 kW motor: Rs about 5 ohm
+
+    folder = _rescaled(grid_start, f"no_nameplate_{columns[0]}", columns, factor, edit)
+    msg = _error(_cli(folder))
+    assert f"{folder / 'meta.yaml'}: key 'stator_dc_resistance' is 5 ohm" in msg and "cannot be" in msg
+    ratio = float(re.search(r"would be ([0-9.e+]+) times the electrical energy", msg).group(1))
+    assert 100 < ratio < 1000
+    load_startup_dataset(_rescaled(grid_start, f"right_scale_{columns[0]}", columns, 1.0, edit))  # loads
