@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from benchmark._api.dataset import DataSet, as_folder, load
+from benchmark._api.dataset import DataSet, as_folder, read_folder
 from benchmark._api.export import MotulatorModel
 from benchmark._api.overrides import to_overrides
 from benchmark._api.results import Diagnosis, Identification
@@ -34,6 +34,33 @@ from benchmark.core.config_files import compose_config, config_groups
 from benchmark.core.config_help import chosen
 
 __all__ = ["DataSet", "Diagnosis", "Identification", "MotulatorModel", "diagnose", "identify", "load", "simulate"]
+
+
+def load(path, *, check: bool = True) -> DataSet:
+    """Read a data folder into a :class:`DataSet`: ``meta.yaml`` as a mapping, each record as a
+    pandas DataFrame, as the files hold them (conditioning happens when it is identified or
+    diagnosed).
+
+    With ``check`` (the default) the folder is also read as an identification reads it, so a
+    mistake is refused here, not later: a missing or misspelt key, a missing column, a
+    non-numeric cell, phase labels swapped, currents in mA, ... raise
+    :class:`benchmark.core.errors.DataError` naming the file, column and row or the key, and data
+    that only look wrong give a :class:`benchmark.core.errors.DataWarning`. ``check=False`` reads
+    the tables alone (a folder being repaired in memory).
+
+    Example
+    -------
+    >>> from benchmark import api
+    >>> data = api.load("examples/data/bench_1kw")
+    >>> data.kind, list(data.tables), data.meta["pole_pairs"]
+    ('startup', ['startup', 'stop'], 1)
+    """
+    data = read_folder(path)
+    if check:
+        from benchmark.core.harness import load_dataset
+
+        load_dataset(compose_config("config", _overrides("config", data, Path(path), {})), with_truth=False)
+    return data
 
 
 def identify(data=None, *, outdir=None, **overrides) -> Identification:

@@ -102,10 +102,11 @@ class DataSet:
         return f"{self.kind} data set{where}: {rows}"
 
 
-def load(path) -> DataSet:
+def read_folder(path) -> DataSet:
     """Read a data folder into a :class:`DataSet` as the files hold it (no conditioning yet:
-    that happens when it is identified or diagnosed). A missing or malformed ``meta.yaml`` or
-    table raises :class:`benchmark.core.errors.DataError` naming the file, column and row."""
+    that happens when it is identified or diagnosed; :func:`benchmark.api.load` also checks it
+    as its problem reads it). A missing or malformed ``meta.yaml`` or table raises
+    :class:`benchmark.core.errors.DataError` naming the file, column and row."""
     folder = Path(path)
     meta = read_meta(folder, {})
     tables: dict[str, pd.DataFrame] = {}

@@ -5,6 +5,7 @@ and simulate reproduces a record from the parameters that made it."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +13,9 @@ import scipy.io
 
 from benchmark import api
 from benchmark._api.overrides import override_value, to_overrides
-from benchmark.core.errors import ConfigError
+from benchmark.core.errors import ConfigError, DataError
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_keyword_arguments_are_hydra_overrides():
@@ -60,6 +63,26 @@ def test_an_in_memory_data_set_is_the_folder_bit_for_bit(tmp_path):
     assert from_folder.truth is not None and abs(from_folder.rel_error["Rs"]) < 0.02  # noisy, 10 cycles
     ds.tables["startup"].loc[5, "i_alpha"] += 1.0
     assert not ds.unchanged()
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda f: (f / "meta.yaml").write_text((f / "meta.yaml").read_text().replace("sample_time", "sampel_time")),
+     "missing key 'sample_time' (found 'sampel_time': misspelt?)"),
+    (lambda f: (f / "startup.csv").write_text("\n".join(
+        ",".join(c for j, c in enumerate(line.split(",")) if j != 4) for line in
+        (f / "startup.csv").read_text().splitlines()) + "\n"), "i_r"),
+])
+def test_a_mistake_is_refused_by_load_not_later(tmp_path, edit, message):
+    """A cold user's misspelt key and missing current column loaded without a word and failed only
+    at identify: load reads the folder as the identification will."""
+    import shutil
+
+    folder = Path(shutil.copytree(REPO / "examples" / "data" / "bench_1kw", tmp_path / "bench"))
+    edit(folder)
+    with pytest.raises(DataError) as info:
+        api.load(folder)
+    assert message in str(info.value) and str(folder) in str(info.value)
+    assert api.load(folder, check=False).tables["startup"].shape[0] > 0  # the tables as they are
 
 
 def test_the_result_reads_writes_and_exports(tmp_path):
