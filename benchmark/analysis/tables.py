@@ -101,6 +101,9 @@ def render_markdown(rows: list[Row], inst, opts, figures: dict, command: str, n_
         if wins.get(group):
             out += ["Who wins:", ""] + [f"- {line}" for line in wins[group]] + [""]
         out += ["### Parameter errors", ""] + _md_table(*_accuracy_table(grp, params, tol)) + [""]
+        if {"J", "fv", "fc"} <= set(params):
+            out += ["fv and fc follow J (a free stop fixes J/fv and fc/J, not J): where the stop record "
+                    "fixes them their errors are J's.", ""]
         out += ["### Fixed target and fixed budget", ""] + _md_table(*_budget_table(grp, opts["budgets"])) + [""]
         failed = [r for row in grp for r in row.runs if r.failed]
         if failed:

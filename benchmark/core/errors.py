@@ -4,6 +4,18 @@
 from __future__ import annotations
 
 
+def where(path, column: str | None = None, row: int | None = None) -> str:
+    """``path, column 'c', row r`` of a message: rows count from the header (row 0), so data row
+    ``r`` of a text table is its line ``r + 1``, which the message says too."""
+    out = str(path)
+    if column is not None:
+        out += f", column '{column}'"
+    if row is not None:
+        text = str(path).lower().endswith((".csv", ".txt"))
+        out += f", row {row}" + (f" (line {row + 1} of the file)" if text else "")
+    return out
+
+
 class UserError(Exception):
     """Base class: a message that names what to fix (file, column, row, or config key)."""
 
@@ -13,12 +25,7 @@ class DataError(UserError):
     where they are known."""
 
     def __init__(self, path, message: str, column: str | None = None, row: int | None = None):
-        where = str(path)
-        if column is not None:
-            where += f", column '{column}'"
-        if row is not None:
-            where += f", row {row}"
-        super().__init__(f"{where}: {message}")
+        super().__init__(f"{where(path, column, row)}: {message}")
         self.path, self.column, self.row, self.message = str(path), column, row, message
 
 
@@ -47,9 +54,4 @@ class DataWarning(ImbenchWarning):
 
     @classmethod
     def at(cls, path, message: str, column: str | None = None, row: int | None = None) -> DataWarning:
-        where = str(path)
-        if column is not None:
-            where += f", column '{column}'"
-        if row is not None:
-            where += f", row {row}"
-        return cls(f"{where}: {message}")
+        return cls(f"{where(path, column, row)}: {message}")

@@ -34,7 +34,8 @@ def read_meta(folder: Path, required: dict[str, type | tuple[type, ...]]) -> dic
     folder = Path(folder)
     path = folder / "meta.yaml"
     if not folder.is_dir():
-        raise DataError(folder, "data set folder does not exist" if not folder.exists()
+        where = "" if folder.is_absolute() else f" (a relative path, read from {Path.cwd()}: {folder.absolute()})"
+        raise DataError(folder, f"data set folder does not exist{where}" if not folder.exists()
                         else "is not a folder: data.path names a data set folder (meta.yaml + CSV tables)")
     if not path.exists():
         raise DataError(path, "missing: every data set folder needs a meta.yaml (docs/data_format.md)")

@@ -282,8 +282,13 @@ def uncertainty_warnings(names, values, se, corr, lower, upper, *, rel_se_max: f
             if not np.isfinite(b):
                 continue
             tol = bound_tol * (width if np.isfinite(width) and width > 0 else max(abs(b), 1.0))
-            if abs(v[j] - b) <= tol:
-                out.append(f"{name} = {v[j]:.4g}{u} sits at its {side} bound {b:.4g}: widen {bounds_key}.{name}")
+            if abs(v[j] - b) <= tol and side == "lower" and b == 0.0:
+                # zero is every motor parameter's physical limit: nothing to widen
+                out.append(f"{name} = {v[j]:.4g}{u} sits at zero, its physical lower limit: the data show none of it "
+                           f"(or another parameter takes its part)")
+            elif abs(v[j] - b) <= tol:
+                out.append(f"{name} = {v[j]:.4g}{u} sits at its {side} bound {b:.4g}: widen it (on the command "
+                           f"line ++{bounds_key}.{name}=[low,high])")
         if not np.isfinite(s[j]):
             out.append(f"{name} is not identifiable from these data: its standard error is not finite")
         elif s[j] > rel_se_max * abs(v[j]):

@@ -119,9 +119,19 @@ def test_bound_and_large_se_messages():
     R = np.eye(2)
     msgs = uncertainty_warnings(["Rs", "J"], [9.0, 0.006], [0.1, 0.01], R, [0.1, 1e-4], [9.0, 1.0],
                                 units={"Rs": "ohm"})
-    assert "Rs = 9 ohm sits at its upper bound 9: widen problem.bounds.Rs" in msgs
+    assert "Rs = 9 ohm sits at its upper bound 9: widen it (on the command line ++problem.bounds.Rs=[low,high])" in msgs
     assert any(m.startswith("J is not identifiable") and "167 %" in m for m in msgs), msgs
     assert len(msgs) == 2
+
+
+def test_a_parameter_at_zero_is_told_it_is_at_its_physical_limit_not_to_widen_a_bound():
+    """A Coulomb friction fitted at 7e-33 N m on its lower bound 0 was told "widen bounds.fc": a
+    friction below zero is no widening a user can do."""
+    msgs = uncertainty_warnings(["fv", "fc"], [0.05, 7e-33], [0.01, 0.01], np.eye(2), [0.0, 0.0], [1.0, 1.0],
+                                units={"fc": "N m"}, bounds_key="bounds")
+    assert msgs == ["fc = 7e-33 N m sits at zero, its physical lower limit: the data show none of it (or another "
+                    "parameter takes its part)", "fc is not identifiable from these data: standard error 0.01 N m is "
+                    "more than 1000 times its value 7e-33 N m (limit 50 %)"]
 
 
 def test_standard_errors_and_correlation_nan_safe():

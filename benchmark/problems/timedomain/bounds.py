@@ -157,7 +157,7 @@ def choose_bounds(settings: TimeDomainSettings, names, ds) -> dict:
         else:
             if derived is None:
                 derived = _derive_or_explain(ds, tuple(names))
-            src, val = f"bounds.{n} (derived from data: give bounds.{n}=[low,high] to override)", derived[n]
+            src, val = f"bounds.{n} (derived from data: give ++bounds.{n}=[low,high] to override)", derived[n]
         out[n] = _check_pair(src, n, val)
     return out
 

@@ -43,7 +43,7 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import condition_record, estimate_offsets
+from benchmark.problems.timedomain.record_conditioning import condition_record, estimate_offsets, speed_offset_note
 from benchmark.problems.timedomain.switch_on import (
     SwitchingSteps,
     has_pretrigger,
@@ -115,7 +115,9 @@ def condition_dataset(ds: StartupDataset) -> StartupDataset:
     if stops and len(speed_offsets) == 1 and speed_offsets[0] != 0.0:
         # the same tachometer records the free stop: its rest offset is there too
         stops = [replace(st, speed=np.asarray(st.speed, float) - speed_offsets[0]) for st in stops]
-        lines.append(f"stop record: the start-up's speed offset {speed_offsets[0]:+.4g} rad/s removed (same sensor)")
+        if abs(speed_offsets[0]) >= 1e-9:  # else rounding of a speed at rest (speed_offset_note)
+            lines.append(f"stop record: the start-up's speed offset {speed_offsets[0]:+.4g} rad/s removed "
+                         "(same sensor)")
     # restored samples are what the model's linear interpolation must see: written back, they
     # are not restored a second time
     return replace(ds, startups=records, stops=stops, conditioning=list(ds.conditioning) + lines,
@@ -217,7 +219,7 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
     speed_out, speed_offset = rec.speed, 0.0
     if speed is not None and np.isfinite(report.speed_offset):
         speed_out, speed_offset = rec.speed - report.speed_offset, float(report.speed_offset)
-        said.append(f"speed offset {report.speed_offset:+.4g} rad/s (rest before switch-on) removed")
+        said.append(speed_offset_note(report.speed_offset))
     if report.speed_check is not None:
         said.append(report.speed_check.line())
     steps = None

@@ -93,6 +93,14 @@ def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
     return float(max(math.sqrt(L * np.var(means, ddof=1)), np.std(e)))
 
 
+def speed_offset_note(offset: float) -> str:
+    """The report's line for the speed's rest offset (rad/s) removed: a speed at rest whose mean is
+    rounding (below 1e-9 rad/s) has none to speak of."""
+    if abs(offset) < 1e-9:
+        return "speed at rest before switch-on reads zero: no offset"
+    return f"speed offset {offset:+.4g} rad/s (rest before switch-on) removed"
+
+
 def estimate_offsets(x, ts: float, pretrigger_end: int | None, f0: float | None, *,
                      tail_s: float | None = None, n_harmonics: int = 7, guard: int = PRETRIGGER_GUARD,
                      mask=None, f0_from=None) -> tuple[float, str, float]:
@@ -152,6 +160,7 @@ class SpeedCheck:
     synchronous : ``2 pi f0 / p`` (rad/s).  ratio : end_speed / synchronous.
     offset : speed reading at rest (rad/s), nan when there is no rest segment.
     still_accelerating, gain_suspected, offset_suspected : flags.  verdict : plain English.
+    tail_s : the tail's length (s) whose mean ``end_speed`` is.
     """
 
     end_speed: float
@@ -162,10 +171,12 @@ class SpeedCheck:
     gain_suspected: bool
     offset_suspected: bool
     verdict: str
+    tail_s: float = 0.1
 
     def line(self) -> str:
         rpm = self.end_speed * 30 / math.pi
-        return f"speed at end {rpm:.1f} rpm = {self.ratio:.4f} of synchronous: {self.verdict}"
+        return (f"speed over the last {self.tail_s:.3g} s {rpm:.1f} rpm on average = {self.ratio:.4f} of synchronous: "
+                f"{self.verdict}")
 
 
 def check_speed_gain(speed, ts: float, f0: float, p: int, tail_s: float = 0.1, *, rest_end: int | None = None,
@@ -208,7 +219,7 @@ def check_speed_gain(speed, ts: float, f0: float, p: int, tail_s: float = 0.1, *
             verdict += f" (ratio near {q:.3g}: check the pole-pair number p = {p})"
     if off_s:
         verdict += f"; tachometer offset {offset:+.3g} rad/s at rest"
-    return SpeedCheck(end, sync, ratio, offset, accel, gain, off_s, verdict)
+    return SpeedCheck(end, sync, ratio, offset, accel, gain, off_s, verdict, n * ts)
 
 
 @dataclass(frozen=True, eq=False)  # holds arrays: compare fields explicitly
@@ -266,7 +277,7 @@ class ConditioningReport:
             per = ", ".join(f"i_{c} {k}" for c, k in zip("rs", self.n_saturated, strict=True))
             out.append(f"{sum(self.n_saturated)} current samples of soft-saturated (flattened) peaks masked ({per})")
         if np.isfinite(self.speed_offset):
-            out.append(f"speed offset {self.speed_offset:+.4g} rad/s (rest before switch-on) removed")
+            out.append(speed_offset_note(self.speed_offset))
         if self.speed_check is not None:
             out.append(self.speed_check.line())
         return out + list(self.notes)

@@ -93,7 +93,7 @@ def test_cli_reports_data_errors_without_traceback(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "benchmark", f"data.path={folder}", "optimizer=genesis",
                            f"hydra.run.dir={tmp_path / 'run'}"], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert "startup.csv, column 'i_alpha', row 2: empty" in proc.stderr
+    assert "startup.csv, column 'i_alpha', row 2 (line 3 of the file): empty" in proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
 
 

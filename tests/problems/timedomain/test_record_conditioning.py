@@ -142,7 +142,7 @@ def test_speed_gain(gain, flagged):
     assert chk.ratio == pytest.approx(0.995 * gain, abs=0.002)
     assert not chk.still_accelerating
     if not flagged:
-        assert chk.line().startswith("speed at end 149") and ": plausible" in chk.line()
+        assert chk.line().startswith("speed over the last 0.1 s 149") and ": plausible" in chk.line()
 
 
 def test_condition_record_report():
