@@ -244,8 +244,10 @@ def smooth_residual(x, window: int, polyorder: int) -> tuple[int, np.ndarray]:
     """(the odd window used, the interior residual of a Savitzky-Golay fit of ``x``: half a window
     from each end left out); ``x`` must hold three windows."""
     x, window = np.asarray(x, dtype=float).ravel(), int(window) | 1
-    if window <= polyorder + 1 or len(x) < 3 * window:
-        raise ValueError(f"window {window} needs polyorder < window - 1 and >= {3 * window} samples")
+    if window <= polyorder + 1:
+        raise ValueError(f"a smoothing window of {window} samples needs an order below {window - 1}")
+    if len(x) < 3 * window:
+        raise ValueError(f"a steady part of {len(x)} samples, where a smooth fit over {window} needs {3 * window}")
     half = window // 2
     return window, (x - signal.savgol_filter(x, window, polyorder, mode="interp"))[half:len(x) - half]
 
