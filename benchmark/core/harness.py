@@ -128,6 +128,17 @@ def concurrent_runs(plugin) -> bool:
     return bool(getattr(plugin, "concurrent_runs", getattr(getattr(plugin, "func", None), "concurrent_runs", False)))
 
 
+def evaluations_text(record: dict) -> str:
+    """``N evaluations`` of a result record, with the optimiser's, the polish's and the nuisance's
+    shares when there is more than the optimiser's (a run's total can exceed its budget)."""
+    parts = [(record.get("evaluations_optimizer"), f"by {record.get('optimizer')}"),
+             ((record.get("polish") or {}).get("evaluations"), "by the polish"),
+             ((record.get("nuisance") or {}).get("evaluations"), "for the nuisance")]
+    shares = [f"{n} {what}" for n, what in parts if n]
+    total = f"{record.get('evaluations')} evaluations"
+    return total if len(shares) < 2 else f"{total} ({', '.join(shares)})"
+
+
 def package_versions() -> dict[str, str]:
     out = {"python": platform.python_version()}
     for name in RECORDED_PACKAGES:
@@ -369,7 +380,7 @@ def format_table(record: dict) -> str:
     cost = record["cost"]
     lines.append(
         f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}, "
-        f"cost {cost if cost is None else f'{cost:.6g}'}, {record['evaluations']} evaluations, "
+        f"cost {cost if cost is None else f'{cost:.6g}'}, {evaluations_text(record)}, "
         f"{record['wall_time_s']:.2f} s"
     )
     if record["status"] in (Status.FAILED.value, Status.TIMEOUT.value):

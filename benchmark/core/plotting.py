@@ -226,10 +226,9 @@ def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str
         lines += [f"Data: {info['data']}", ""]
     if info.get("conditioning"):  # what the problem's loader did to the record (bench records)
         lines += ["Conditioning on load:", ""] + [f"- {c}" for c in info["conditioning"]] + [""]
-    evals = f"{r.get('evaluations')} evaluations"
-    pol = (r.get("polish") or {}).get("evaluations")
-    if pol:
-        evals += f" ({r.get('evaluations_optimizer')} by {r.get('optimizer')}, {pol} by polish)"
+    from benchmark.core.harness import evaluations_text
+
+    evals = evaluations_text(r)
     lines += [f"Status **{r.get('status')}**: cost {'-' if cost is None else f'{cost:.6g}'} after {evals}, "
               f"budget {r.get('budget')}, {r.get('wall_time_s', 0):.2f} s."
               + (f" {r['message']}" if r.get("message") and r.get("status") != "budget_spent" else ""), ""]
