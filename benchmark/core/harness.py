@@ -185,13 +185,16 @@ def run(cfg: DictConfig, outdir: Path, overrides: list[str] | None = None) -> Ru
 
     t_start = time.perf_counter()
     mib = (cfg.get("data") or {}).get("max_file_mib")
-    with warnings.catch_warnings(record=True) as caught, \
-            table_size_limit(None if mib is None else int(float(mib) * 2**20)):
-        warnings.simplefilter("always")
-        problem: Problem = build_problem(cfg)
+    caught: list = []
+    try:
+        with warnings.catch_warnings(record=True) as caught, \
+                table_size_limit(None if mib is None else int(float(mib) * 2**20)):
+            warnings.simplefilter("always")
+            problem: Problem = build_problem(cfg)
+    finally:  # shown once, after set-up, also before a set-up error they may explain (one line each)
+        for w in caught:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     run_warnings = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
-    for w in caught:  # shown once, after set-up (the command line prints them one line each)
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     setup_time = time.perf_counter() - t_start
 
     fingerprint = run_fingerprint(resolved(cfg), problem)

@@ -223,7 +223,8 @@ def test_cli_hostile_data(tmp_path, small_set, four_pole_set):
         return folder
 
     errors = {
-        "nan": (m_nan, ["error: ", "startup.csv, column 'v_beta', row 7 (line 8 of the file): not a finite number"], ()),
+        "nan": (m_nan, ["error: ", "startup.csv, column 'v_beta', row 7 (line 8 of the file): not a finite number"],
+                ()),
         "meta": (m_meta_misspelt_key, ["error: ", "meta.yaml: missing key 'sample_time'"], ()),
         "huge": (
             lambda f: None,

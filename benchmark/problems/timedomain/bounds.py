@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from benchmark.core.errors import ConfigError
+from benchmark.core.errors import ConfigError, DataError
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.frames import fundamental, phasor_speed
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES
@@ -48,6 +48,12 @@ def derive_bounds(ds: StartupDataset, names: tuple[str, ...]) -> dict[str, tuple
         w_end = w_e / ds.pole_pairs
     power = 1.5 * (r.v_alpha * r.i_alpha + r.v_beta * r.i_beta)
     E_in = float(np.sum(power) * ds.sample_time)
+    if "J" in names and not E_in > 0:
+        raise DataError(r.source, f"the start-up takes in no energy ({E_in:.3g} J from 1.5 (v_alpha i_alpha + v_beta "
+                                  "i_beta)), which a motor accelerating from rest must: do the voltages and currents "
+                                  "belong together as wired (line-to-line voltages under the phase columns, a probe "
+                                  "reversed, current columns of other phases)? See the warnings above; give "
+                                  "++bounds.J=[low,high] to go on regardless")
     J_max = 2.0 * E_in / max(w_end, 1e-9) ** 2
     # friction and windage loss <= no-load input power <= no-load apparent power S0; the mean
     # power of a zoh (inverter) record can come out near zero, so S0 / 4 is a floor
@@ -149,14 +155,15 @@ def choose_bounds(settings: TimeDomainSettings, names, ds) -> dict:
                               + _not_searched_hint(unknown, names))
     out = {}
     derived = None
+    given = set(user or ()) | set(preset_bounds or ())
     for n in names:
         if user is not None and n in user:
             src, val = f"bounds.{n}", user[n]
         elif preset_bounds is not None and n in preset_bounds:
             src, val = f"motor.bounds.{n}", preset_bounds[n]
         else:
-            if derived is None:
-                derived = _derive_or_explain(ds, tuple(names))
+            if derived is None:  # the ones not given (a bound the data cannot give may be given)
+                derived = _derive_or_explain(ds, tuple(m for m in names if m not in given))
             src, val = f"bounds.{n} (derived from data: give ++bounds.{n}=[low,high] to override)", derived[n]
         out[n] = _check_pair(src, n, val)
     return out

@@ -446,6 +446,10 @@ def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
                     f"{as_rpm:.4g} rad/s), or declare speed_unit: rpm in meta.yaml")
         if speed_unit == "rpm":
             rpm_hint = " (meta.yaml declares speed_unit: rpm; the speed above is after conversion)"
+        k_times = abs(v) / w_sync
+        if round(k_times) >= 2 and abs(k_times / round(k_times) - 1.0) < 0.15:  # an integer multiple
+            rpm_hint = (f"; at {round(k_times)} times it, is the speed electrical (divide it by pole_pairs {p}) or "
+                        f"pole_pairs too large (then {p / round(k_times):g})?") + rpm_hint
         if strict:
             raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
                             + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)

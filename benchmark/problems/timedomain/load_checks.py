@@ -234,6 +234,30 @@ def check_speed_direction(rec, pole_pairs: int) -> None:
                                     "the stop record's)", column="speed")
 
 
+def check_pole_pairs(rec, pole_pairs: int) -> None:
+    """A rotor that settles at ``k / p_true`` of the synchronous speed ``w_e / pole_pairs`` with
+    ``pole_pairs / p_true`` a ratio of integers where a motor's no-load speed would come out
+    (0.9-1.0 of synchronous with ``p_true``): a DataWarning that ``pole_pairs`` may be too small
+    (2 for a 4-pole motor given as 1 put it at 0.50 of synchronous, and the fit 284 times the
+    noise off, with no word on the cause). A warning only: a heavy load can hold a motor at a
+    high slip."""
+    if not rec.has_speed or not pole_pairs or not settled(rec):
+        return
+    sync = abs(electrical_speed(rec)) / pole_pairs
+    if not sync > 0:
+        return
+    ratio = abs(float(np.mean(rec.speed[_tail(rec)]))) / sync
+    if not 0.0 < ratio < 0.9:
+        return
+    true_p = round(pole_pairs / ratio)
+    if true_p > pole_pairs and 0.9 <= ratio * true_p / pole_pairs <= 1.0:
+        warnings.warn(DataWarning.at(
+            rec.source, f"the rotor settles at {ratio:.3f} of the synchronous speed {sync:.4g} rad/s that "
+                        f"pole_pairs {pole_pairs} gives: is pole_pairs {true_p} (a {2 * true_p}-pole motor, "
+                        f"{ratio * true_p / pole_pairs:.3f} of its synchronous speed)? A motor settles near "
+                        "its synchronous speed unless heavily loaded", column="speed"), stacklevel=3)
+
+
 def settled(rec) -> bool:
     """Whether the record ends in a steady state: over its last fifth the speed's (or without a
     speed, the current amplitude's) mean in the first and second halves agree within 2 %. A start
@@ -329,9 +353,9 @@ def check_stator_resistance(rec, stator_dc_resistance: float | None, meta_path) 
     power = 1.5 * (rec.v_alpha * rec.i_alpha + rec.v_beta * rec.i_beta)
     copper = 1.5 * (rec.i_alpha**2 + rec.i_beta**2)
     energy, squares = float(np.sum(power)), float(np.sum(copper))  # both times Ts: the ratio drops it
-    if not squares > 0:
-        return
-    ratio = stator_dc_resistance * squares / energy if energy > 0 else math.inf
+    if not (squares > 0 and energy > 0):
+        return  # no current, or a record that gives back more than it takes (a machine driven as a generator)
+    ratio = stator_dc_resistance * squares / energy
     if ratio > RS_ENERGY_RATIO_POSSIBLE:
         ts = float(np.median(np.diff(rec.t)))
         raise DataError(meta_path, f"key 'stator_dc_resistance' is {stator_dc_resistance:.4g} ohm, but at that "
@@ -363,6 +387,7 @@ def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold:
         check_supply_frequency(rec, supply_frequency, meta_path)
         check_phase_sequence(rec, pole_pairs)
         check_speed_direction(rec, pole_pairs)
+        check_pole_pairs(rec, pole_pairs)
         check_scales(rec, nameplate, pole_pairs)
         check_stator_resistance(rec, stator_dc_resistance, meta_path)
         check_input_hold(rec, input_hold, meta_path)
