@@ -33,7 +33,13 @@ import numpy as np
 
 from benchmark.core import commands
 from benchmark.core.nuisance import JointView, has_nuisance
-from benchmark.core.uncertainty import correlation, hac_covariance, misfit_ratio, standard_errors, uncertainty_warnings
+from benchmark.core.uncertainty import (
+    correlation,
+    hac_covariance_floored,
+    misfit_ratio,
+    standard_errors,
+    uncertainty_warnings,
+)
 
 #: Central-difference step, relative to each parameter (absolute floor: this times the bound span).
 JACOBIAN_REL_STEP = 1e-5
@@ -89,9 +95,7 @@ def parameter_uncertainty(problem, x) -> dict:
     floor = float(floor_fn()) if floor_fn is not None else 0.0
     with _warnings.catch_warnings(record=True) as caught:
         _warnings.simplefilter("always")
-        cov, info = hac_covariance(Jl, rl, groups=gl, return_info=True)
-        if info.bandwidth < floor:
-            cov, info = hac_covariance(Jl, rl, groups=gl, bandwidth=floor, return_info=True)
+        cov, info = hac_covariance_floored(Jl, rl, groups=gl, floor=floor)
     se = standard_errors(cov)
     if info.rank < info.k:
         involved = np.flatnonzero(np.abs(info.null_space).max(axis=1) > 1e-3)

@@ -192,6 +192,19 @@ def hac_covariance(jac, residuals, groups=None, bandwidth=None, *, aligned=None,
     return cov, HACInfo(st, n_lags, rank, k, tuple(float(x) for x in rho), cross, null)
 
 
+def hac_covariance_floored(jac, residuals, groups=None, floor: float = 0.0, **options):
+    """:func:`hac_covariance` (``return_info``) with the Andrews bandwidth, but at least
+    ``floor`` samples: the rule of every machine record's standard errors (the identification's
+    and the diagnosis's), ``floor`` one supply period. The scores of a machine record are
+    modulated at the supply frequency and carry the measured voltage's noise through the model,
+    which the AR(1) plug-in reads as nearly white (coverage of the 95 % intervals: 70 % with the
+    plug-in alone, 90 % with the floor, zoo study, coloured noise)."""
+    cov, info = hac_covariance(jac, residuals, groups=groups, return_info=True, **options)
+    if info.bandwidth < floor:
+        cov, info = hac_covariance(jac, residuals, groups=groups, bandwidth=floor, return_info=True, **options)
+    return cov, info
+
+
 def white_covariance(jac, residuals) -> np.ndarray:
     """Textbook ``s^2 (J'J)^+`` with ``s^2 = r'r / (n - k)``: valid for white residuals only."""
     J = np.asarray(jac, dtype=float)

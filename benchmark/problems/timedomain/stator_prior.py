@@ -11,7 +11,7 @@ default (``problem.stator_prior_spread``). Copper's resistance is proportional t
 
 **Weight.** Prior and data are combined as a posterior would combine them if the data's
 information about Rs is what the fit's own standard error says: the HAC sandwich variance ``V``
-of Rs (:func:`benchmark.core.uncertainty.hac_covariance`, which grows with the misfit and with
+of Rs (:func:`benchmark.core.uncertainty.hac_covariance_floored`, which grows with the misfit and with
 its correlation in time), not ``N`` independent samples. A model that misses the data by ten
 times the noise over 36 000 correlated samples would otherwise outweigh any prior by sheer
 sample count and move Rs by a factor two unopposed. In the least-squares objective ``sum r^2``
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from benchmark.core.uncertainty import hac_covariance
+from benchmark.core.uncertainty import hac_covariance_floored
 
 #: Default one-sigma spread of the winding's temperature during the record about its temperature
 #: at the DC measurement, K (``problem.stator_prior_spread``).
@@ -115,9 +115,7 @@ class StatorResistancePrior:
         """Set ``V / A`` (and eq. 15's ratio) from the data's Jacobian ``jac`` (rows: the data's
         least-squares residuals ``res``, channel labels ``groups``; no prior row) at the fit;
         True when a weight changed by more than :data:`CALIBRATION_TOLERANCE`."""
-        cov, info = hac_covariance(jac, res, groups=groups, return_info=True)
-        if info.bandwidth < bandwidth_floor:
-            cov = hac_covariance(jac, res, groups=groups, bandwidth=bandwidth_floor)
+        cov, _ = hac_covariance_floored(jac, res, groups=groups, floor=bandwidth_floor)
         V = float(cov[rs_col, rs_col])
         A = float(np.linalg.pinv(jac.T @ jac)[rs_col, rs_col])
         H = sum(math.sqrt(2.0 / math.pi) / max(math.sqrt(float(np.mean(res[groups == g] ** 2))), 1e-300)

@@ -21,7 +21,7 @@ import numpy as np
 from benchmark.core.capped_least_squares import capped_least_squares
 from benchmark.core.effects import Effect, EffectContext
 from benchmark.core.noise_estimates import NoiseEstimate
-from benchmark.core.uncertainty import hac_covariance, standard_errors
+from benchmark.core.uncertainty import hac_covariance_floored, standard_errors
 from benchmark.problems.timedomain.diagnosis.engine import quiet
 from benchmark.problems.timedomain.diagnosis.free_coast import FreeCoast, switched_at_end
 from benchmark.problems.timedomain.diagnosis.record import DiagnosisData
@@ -303,7 +303,8 @@ class JointModel:
 
     def standard_errors(self, x: np.ndarray) -> np.ndarray:
         """Standard errors of ``x`` (a fit on all residuals) from the coloured-residual
-        (HAC) sandwich covariance."""
+        (HAC) sandwich covariance, by the identification's rule (the Andrews bandwidth, at least
+        one supply period: :func:`benchmark.core.uncertainty.hac_covariance_floored`)."""
         x = np.asarray(x, float)
         h = 1e-6 * np.maximum(np.abs(x), 1e-9 + 1e-6 * (self.upper - self.lower))
         X = x[None, :] + np.diag(h)
@@ -312,7 +313,8 @@ class JointModel:
         J = -((R - r0[None, :]) / h[:, None]).T  # d(model/sigma)/dx (sign does not matter)
         with quiet():
             try:
-                cov = hac_covariance(J, r0, groups=self.data.channel_labels(), aligned=False)
+                floor = 1.0 / (self.data.supply_frequency * self.data.sample_time)
+                cov, _ = hac_covariance_floored(J, r0, groups=self.data.channel_labels(), floor=floor, aligned=False)
             except (ValueError, np.linalg.LinAlgError):
                 return np.full(len(x), np.nan)
         # a parameter the residuals do not depend on here (the magnetising node's place while
