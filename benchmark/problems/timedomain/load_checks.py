@@ -265,8 +265,10 @@ def settled(rec) -> bool:
     tail = _tail(rec)
     x = np.abs(rec.speed[tail]) if rec.has_speed else np.hypot(rec.i_alpha[tail], rec.i_beta[tail])
     half = len(x) // 2
+    if half <= 4:
+        return False
     a, b = float(np.mean(x[:half])), float(np.mean(x[half:]))
-    return half > 4 and abs(a - b) <= 0.02 * max(abs(b), 1e-12)
+    return abs(a - b) <= 0.02 * max(abs(b), 1e-12)
 
 
 def _ratio_check(path, column, what, ratio, plausible, possible, hint, steady: bool) -> None:

@@ -27,7 +27,11 @@ from benchmark.problems.timedomain.motor import PARAMETER_UNITS
 from benchmark.problems.timedomain.problem import problem_from_dataset
 from benchmark.problems.timedomain.settings import TimeDomainSettings
 from benchmark.problems.timedomain.speed_filter import speed_misfit
-from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C, copper_temperature
+from benchmark.problems.timedomain.stator_prior import (
+    DEFAULT_TEMPERATURE_C,
+    WINDING_TEMPERATURE_RANGE_C,
+    copper_temperature,
+)
 from benchmark.problems.timedomain.stop_record import startup_alone, stop_record_check, stop_record_lines
 
 
@@ -170,7 +174,9 @@ def stated_resistance_lines(check: dict | None) -> list[str]:
             "not used: the diagnosis fits Rs from the record (problem.stator_resistance=prior makes it a prior)")
     line = (f"Stated DC stator resistance (meta.yaml): {check['ohm']:.4g} ohm{at}, {used}. The final model's Rs, "
             f"{check['final_Rs_ohm']:.4g} ohm, is {100 * check['relative_deviation']:+.0f} % off it: a copper winding "
-            f"at {check['copper_temperature_C']:.0f} deg C")
+            f"at {check['copper_temperature_C']:.0f} deg C"
+            + (f" (the DC value taken at {DEFAULT_TEMPERATURE_C:g} deg C: meta.yaml states no winding_temperature)"
+               if check["winding_temperature_C"] is None else ""))
     if not check["copper_can_reach"]:
         lo, hi = WINDING_TEMPERATURE_RANGE_C
         line += (f", which no winding reaches ({lo:g} to {hi:g} deg C): the model's Rs stands for more than the "
@@ -217,7 +223,8 @@ def render_markdown(doc: dict) -> str:
              f"{gb['noise_band'][1]:.3f} (the noise estimate's own uncertainty).",
              f"Share of the excess held-out misfit (above the noise) explained: "
              f"{100 * doc['explained_share']:.0f} %.", "",
-             f"Where: {loc['summary']}.", ""]
+             f"Where: {loc['summary']}." if doc["status"] != "no_gap" else
+             f"Where: nowhere as a whole (the held-out gap is within the band); locally {loc['summary']}.", ""]
     lines += [line for w in doc.get("warnings", []) for line in (f"**Check:** {w}", "")]
     lines += capped_fit_lines(doc.get("fits"))
     if doc["per_effect"]:
