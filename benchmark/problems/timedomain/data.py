@@ -34,7 +34,7 @@ from benchmark.problems.timedomain.channel_timing import (
     realign,
 )
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
-from benchmark.problems.timedomain.load_checks import check_records
+from benchmark.problems.timedomain.load_checks import check_records, check_speed_plausibility
 from benchmark.problems.timedomain.speed_filter import parse_speed_filter
 from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C
 
@@ -44,9 +44,6 @@ CURRENT_COLUMNS = (("i_alpha", "i_beta"), ("i_r", "i_s"))
 #: A mechanical speed above this (rad/s, about 15 000 rpm) is implausible for a motor in
 #: this benchmark; a column that exceeds it is probably in rpm.
 PLAUSIBLE_SPEED_LIMIT = 1600.0
-#: A speed above this multiple of the synchronous speed (plus 1 rad/s) cannot come from a
-#: motor starting on its supply (see :func:`_check_speed_plausibility`).
-SYNC_SPEED_MARGIN = 1.5
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
              "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
@@ -257,7 +254,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     for rec in startups:
         check_mapping_columns(meta_path, skew, rec.columns)
     stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
-    _check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
+    check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
     check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"),
                   optional.get("stator_dc_resistance"))
     ds = StartupDataset(
@@ -388,74 +385,6 @@ def _check_speed(path: Path, speed: np.ndarray, unit: str = "rad/s") -> None:
                    f"{PLAUSIBLE_SPEED_LIMIT * 30 / np.pi:.0f} rpm; is the column in rpm? rad/s = rpm * pi / 30, "
                    "or declare speed_unit: rpm in meta.yaml)")
         raise DataError(path, msg, column="speed", row=k + 1)
-
-
-def synchronous_speed_estimate(rec: StartupRecord, pole_pairs: int, sample_time: float) -> float:
-    """Mechanical synchronous speed (rad/s) estimated from the rotation of the current phasor:
-    the fastest mean rotation over ten windows of the record (0 if it cannot be told)."""
-    i = rec.i_alpha + 1j * rec.i_beta
-    n = len(i)
-    if n < 20:
-        return 0.0
-    mag = np.abs(i)
-    if not mag.max() > 0:
-        return 0.0
-    phase = np.unwrap(np.angle(i))
-    best = 0.0
-    edges = np.linspace(0, n - 1, 11).astype(int)
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        if b - a < 2 or np.median(mag[a:b + 1]) < 0.05 * mag.max():
-            continue
-        best = max(best, abs(phase[b] - phase[a]) / ((b - a) * sample_time))
-    return best / pole_pairs
-
-
-def _check_speed_plausibility(meta_path: Path, startups, stops, p: int,
-                              supply_frequency: float | None, speed_unit: str = "rad/s") -> None:
-    """Speed against the synchronous speed ``2 pi f / p``: an induction motor starting on its
-    supply with no driving load cannot run much above it (the start-up overshoot stays well
-    below: about 20 % for an 8-pole variant of the paper motor). With ``supply_frequency`` in
-    meta.yaml the check is strict: above :data:`SYNC_SPEED_MARGIN` times the synchronous
-    speed is an error. Without it, the
-    frequency is estimated from the current phasor's rotation, and exceeding the margin is
-    only a :class:`DataWarning` (the estimate can be fooled), typically a column in rpm."""
-    records = [(r.source, r.speed) for r in startups if r.has_speed] + [(r.source, r.speed) for r in stops]
-    if supply_frequency is not None:
-        w_sync = 2 * np.pi * supply_frequency / p
-        basis = f"supply_frequency {supply_frequency:g} Hz and pole_pairs {p} in meta.yaml"
-        strict = True
-    else:
-        estimates = [synchronous_speed_estimate(r, p, float(np.median(np.diff(r.t))) if len(r.t) > 1 else 1.0)
-                     for r in startups]
-        w_sync = max(estimates) if estimates else 0.0
-        basis = (f"estimated from the rotation of the currents (about {w_sync * p / (2 * np.pi):.3g} Hz) and "
-                 f"pole_pairs {p}")
-        strict = False
-    if not w_sync > 0:
-        return
-    limit = SYNC_SPEED_MARGIN * w_sync + 1.0
-    for source, speed in records:
-        k = int(np.argmax(np.abs(speed)))
-        if abs(speed[k]) <= limit:
-            continue
-        v = float(speed[k])
-        msg = (f"speed {v:.6g} rad/s is {abs(v) / w_sync:.3g} times the synchronous speed {w_sync:.4g} rad/s "
-               f"({basis})")
-        as_rpm = abs(v) * np.pi / 30
-        rpm_hint = (f"; if the column is in rpm, convert it: rad/s = rpm * pi / 30 ({abs(v):.6g} rpm = "
-                    f"{as_rpm:.4g} rad/s), or declare speed_unit: rpm in meta.yaml")
-        if speed_unit == "rpm":
-            rpm_hint = " (meta.yaml declares speed_unit: rpm; the speed above is after conversion)"
-        k_times = abs(v) / w_sync
-        if round(k_times) >= 2 and abs(k_times / round(k_times) - 1.0) < 0.15:  # an integer multiple
-            rpm_hint = (f"; at {round(k_times)} times it, is the speed electrical (divide it by pole_pairs {p}) or "
-                        f"pole_pairs too large (then {p / round(k_times):g})?") + rpm_hint
-        if strict:
-            raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
-                            + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)
-        warnings.warn(DataWarning.at(source, "looks like rpm, not rad/s: " + msg + rpm_hint
-                                     + " (give supply_frequency in meta.yaml to make this an error)",
-                                     column="speed", row=k + 1), stacklevel=3)
 
 
 def write_startup_dataset(folder, ds: StartupDataset, truth: dict | None = None) -> Path:

@@ -1,9 +1,10 @@
 """Checks on load of a start-up record for mistakes that still produce a result: wiring (phase
 labels swapped or rotated between the voltage and the current channels, a current probe or a
 tachometer reversed, line-to-line voltages given as phase voltages), units (a current, voltage
-or speed scale the nameplate contradicts, an inertia the rated power contradicts), a supply
-frequency the voltages contradict, and the input hold (inverter levels read as a continuous
-voltage). Each says what is wrong and how to fix it in one line: an error
+or speed scale the nameplate contradicts, an inertia the rated power contradicts, a stated DC
+resistance the record's energy contradicts, a speed beyond the synchronous one), pole pairs the
+settled speed contradicts, a supply frequency the voltages contradict, and the input hold
+(inverter levels read as a continuous voltage). Each says what is wrong and how to fix it in one line: an error
 (:class:`~benchmark.core.errors.DataError`, exit status 2) where the data cannot be right, a
 warning (:class:`~benchmark.core.errors.DataWarning`) where they only look wrong. Run on the
 records as read, before the conditioning (:func:`check_records`).
@@ -18,11 +19,15 @@ from __future__ import annotations
 import math
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from benchmark.core.errors import DataError, DataWarning
 from benchmark.problems.timedomain.frames import clarke, fundamental, inverse_clarke, phasor_speed
+
+if TYPE_CHECKING:  # the records' type (data.py imports this module)
+    from benchmark.problems.timedomain.data import StartupRecord
 
 #: A motor's current lags its voltage by 0-90 degrees; a phase angle outside this window (deg)
 #: is no motor's: labels rotated by 120 degrees move it by 120.
@@ -64,6 +69,9 @@ RATED_EFFICIENCY_POWER_FACTOR = (0.3, 0.9)
 #: the example it was 0.15-0.74): the margin holds a winding measured hot and started cold and a
 #: delta winding's phase resistance given for its star equivalent (3 times it).
 RS_ENERGY_RATIO_POSSIBLE = 5.0
+#: A speed above this multiple of the synchronous speed (plus 1 rad/s) cannot come from a
+#: motor starting on its supply (see :func:`check_speed_plausibility`).
+SYNC_SPEED_MARGIN = 1.5
 #: An inverter's voltage holds its level: at least this share of samples repeat the one before.
 HELD_SHARE = 0.5
 #: ... on at most this many distinct levels per channel.
@@ -380,6 +388,74 @@ def check_input_hold(rec, input_hold: str, meta_path) -> None:
             meta_path, f"input_hold is linear, but the voltages of {rec.source} hold {levels} levels for "
                        f"{100 * held:.0f} % of the samples, as an inverter's switch states do: set input_hold: zoh "
                        "(the model would otherwise ramp between the levels)", column=None), stacklevel=3)
+
+
+def synchronous_speed_estimate(rec: StartupRecord, pole_pairs: int, sample_time: float) -> float:
+    """Mechanical synchronous speed (rad/s) estimated from the rotation of the current phasor:
+    the fastest mean rotation over ten windows of the record (0 if it cannot be told)."""
+    i = rec.i_alpha + 1j * rec.i_beta
+    n = len(i)
+    if n < 20:
+        return 0.0
+    mag = np.abs(i)
+    if not mag.max() > 0:
+        return 0.0
+    phase = np.unwrap(np.angle(i))
+    best = 0.0
+    edges = np.linspace(0, n - 1, 11).astype(int)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if b - a < 2 or np.median(mag[a:b + 1]) < 0.05 * mag.max():
+            continue
+        best = max(best, abs(phase[b] - phase[a]) / ((b - a) * sample_time))
+    return best / pole_pairs
+
+
+def check_speed_plausibility(meta_path: Path, startups, stops, p: int,
+                              supply_frequency: float | None, speed_unit: str = "rad/s") -> None:
+    """Speed against the synchronous speed ``2 pi f / p``: an induction motor starting on its
+    supply with no driving load cannot run much above it (the start-up overshoot stays well
+    below: about 20 % for an 8-pole variant of the paper motor). With ``supply_frequency`` in
+    meta.yaml the check is strict: above :data:`SYNC_SPEED_MARGIN` times the synchronous
+    speed is an error. Without it, the
+    frequency is estimated from the current phasor's rotation, and exceeding the margin is
+    only a :class:`DataWarning` (the estimate can be fooled), typically a column in rpm."""
+    records = [(r.source, r.speed) for r in startups if r.has_speed] + [(r.source, r.speed) for r in stops]
+    if supply_frequency is not None:
+        w_sync = 2 * np.pi * supply_frequency / p
+        basis = f"supply_frequency {supply_frequency:g} Hz and pole_pairs {p} in meta.yaml"
+        strict = True
+    else:
+        estimates = [synchronous_speed_estimate(r, p, float(np.median(np.diff(r.t))) if len(r.t) > 1 else 1.0)
+                     for r in startups]
+        w_sync = max(estimates) if estimates else 0.0
+        basis = (f"estimated from the rotation of the currents (about {w_sync * p / (2 * np.pi):.3g} Hz) and "
+                 f"pole_pairs {p}")
+        strict = False
+    if not w_sync > 0:
+        return
+    limit = SYNC_SPEED_MARGIN * w_sync + 1.0
+    for source, speed in records:
+        k = int(np.argmax(np.abs(speed)))
+        if abs(speed[k]) <= limit:
+            continue
+        v = float(speed[k])
+        msg = (f"speed {v:.6g} rad/s is {abs(v) / w_sync:.3g} times the synchronous speed {w_sync:.4g} rad/s "
+               f"({basis})")
+        as_rpm = abs(v) * np.pi / 30
+        rpm_hint = (f"; if the column is in rpm, convert it: rad/s = rpm * pi / 30 ({abs(v):.6g} rpm = "
+                    f"{as_rpm:.4g} rad/s), or declare speed_unit: rpm in meta.yaml")
+        if speed_unit == "rpm":
+            rpm_hint = " (meta.yaml declares speed_unit: rpm; the speed above is after conversion)"
+        k_times = abs(v) / w_sync
+        if round(k_times) >= 2 and abs(k_times / round(k_times) - 1.0) < 0.15:  # an integer multiple
+            rpm_hint = (f"; at {round(k_times)} times it, is the speed electrical (divide it by pole_pairs {p}) or "
+                        f"pole_pairs too large (then {p / round(k_times):g})?") + rpm_hint
+        if strict:
+            raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
+                            + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)
+        warnings.warn(DataWarning.at(source, "looks like rpm, not rad/s: " + msg + rpm_hint
+                                     + " (give supply_frequency in meta.yaml to make this an error)",
+                                     column="speed", row=k + 1), stacklevel=3)
 
 
 def check_records(startups, nameplate: dict | None, pole_pairs: int, input_hold: str, meta_path,
