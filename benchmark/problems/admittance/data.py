@@ -38,6 +38,7 @@ from benchmark.core.io import write_table_atomic, write_yaml_atomic
 from benchmark.core.meta_file import read_meta
 from benchmark.core.tables import read_table
 from benchmark.problems.admittance.circuit import slip_from_speed, speed_from_slip
+from benchmark.problems.admittance.sweep_checks import check_sweep_table
 
 __all__ = ["AdmittanceData", "load_admittance", "load_steady_state", "write_admittance", "read_truth"]
 
@@ -238,6 +239,7 @@ def load_admittance(folder) -> AdmittanceData:
             parts["time"].append(t)
         if has["torque"]:
             parts["torque"].append(df["torque"].to_numpy())
+        check_sweep_table(path, s if "slip" in chosen else None, df["G"].to_numpy(), df["B"].to_numpy(), rdc)
         parts["slip"].append(s)
         parts["G"].append(df["G"].to_numpy())
         parts["B"].append(df["B"].to_numpy())
