@@ -249,7 +249,8 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         else:
             after = 1
         v_a, v_b = sampled_volt_seconds(v_a, after), sampled_volt_seconds(v_b, after)
-        said.append(f"measured supply voltages from t = {after * ts:.4f} s on: the volt-seconds the linear "
+        in_file = f" of the trimmed record ({(after + first) * ts:.4f} s in the file)" if first else ""
+        said.append(f"measured supply voltages from t = {after * ts:.4f} s{in_file} on: the volt-seconds the linear "
                     "interpolation loses between samples of a continuous voltage restored (second difference / 12)")
     return StartupRecord(
         t=rec.t[sl] - rec.t[first], v_alpha=v_a, v_beta=v_b, i_alpha=i_a[sl], i_beta=i_b[sl],
@@ -337,7 +338,8 @@ def switching_line(steps: SwitchingSteps, ts: float, n_masked: int) -> str:
     if steps.inductance is None:
         how = "their volt-seconds could not be estimated from the current (left as sampled)"
     else:
-        how = (f"their volt-seconds corrected from the current's response (transient inductance "
-               f"{1e3 * steps.inductance:.4g} mH; fractions of the sample after the step "
+        how = (f"their volt-seconds corrected from the current's response (the steps' samples fitted with an "
+               f"inductance of {1e3 * steps.inductance:.4g} mH, a local fit, not the machine's leakage; fractions of "
+               "the sample after the step "
                + ", ".join(f"{f:.2f}" for f in steps.fractions) + ")")
     return f"{where}: {how}; {n_masked} current samples of the switching window masked"
