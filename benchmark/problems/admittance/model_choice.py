@@ -190,7 +190,8 @@ class ModelChoice:
 
     def warnings(self) -> list[str]:
         stated = self.not_fixed()
-        return [f"model choice ({self.chosen.label}): " + "; ".join(stated)] if stated else []
+        return [f"model choice ({self.chosen.label}; standard errors of its own least-squares fit, white-noise "
+                "ones, not the table's HAC ones of the run): " + "; ".join(stated)] if stated else []
 
     def record(self) -> dict:
         return {
