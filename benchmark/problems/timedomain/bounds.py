@@ -11,6 +11,7 @@ import numpy as np
 from benchmark.core.errors import ConfigError, DataError
 from benchmark.problems.timedomain.data import StartupDataset
 from benchmark.problems.timedomain.frames import fundamental, phasor_speed
+from benchmark.problems.timedomain.load_checks import input_power
 from benchmark.problems.timedomain.motor import PARAMETER_NAMES
 from benchmark.problems.timedomain.settings import WEIGHT_KEYS, TimeDomainSettings
 
@@ -46,7 +47,7 @@ def derive_bounds(ds: StartupDataset, names: tuple[str, ...]) -> dict[str, tuple
     w_end = float(np.mean(r.speed[tail])) if np.all(np.isfinite(r.speed[tail])) else math.nan
     if not w_end > 0:  # no speed sensor: near no load the rotor runs close to synchronous speed
         w_end = w_e / ds.pole_pairs
-    power = 1.5 * (r.v_alpha * r.i_alpha + r.v_beta * r.i_beta)
+    power = input_power(r)
     E_in = float(np.sum(power) * ds.sample_time)
     if "J" in names and not E_in > 0:
         raise DataError(r.source, f"the start-up takes in no energy ({E_in:.3g} J from 1.5 (v_alpha i_alpha + v_beta "

@@ -89,6 +89,17 @@ def electrical_speed(rec) -> float:
     return phasor_speed(rec.v_alpha[tail], rec.v_beta[tail], rec.t[tail])
 
 
+def final_speed(rec) -> float:
+    """Mean speed (rad/s, signed) over the record's last fifth."""
+    return float(np.mean(rec.speed[_tail(rec)]))
+
+
+def input_power(rec) -> np.ndarray:
+    """Electrical power (W) the machine takes in at each sample, ``1.5 (v_alpha i_alpha + v_beta
+    i_beta)``: summed over a record and times its sample time, the energy it took."""
+    return 1.5 * (rec.v_alpha * rec.i_alpha + rec.v_beta * rec.i_beta)
+
+
 def _columns(rec, kind: str) -> str:
     cols = getattr(rec, "columns", None) or {}
     return cols.get(kind, "v_alpha, v_beta" if kind == "voltage" else "i_alpha, i_beta")
@@ -233,7 +244,7 @@ def check_speed_direction(rec, pole_pairs: int) -> None:
     if not rec.has_speed or not pole_pairs:
         return
     w_e = electrical_speed(rec)
-    final = float(np.mean(rec.speed[_tail(rec)]))
+    final = final_speed(rec)
     sync = abs(w_e) / pole_pairs
     if abs(w_e) > 0 and final * np.sign(w_e) < -0.5 * sync:
         raise DataError(rec.source, f"the rotor ends at {final:.4g} rad/s, against the supply's phase sequence "
@@ -254,7 +265,7 @@ def check_pole_pairs(rec, pole_pairs: int) -> None:
     sync = abs(electrical_speed(rec)) / pole_pairs
     if not sync > 0:
         return
-    ratio = abs(float(np.mean(rec.speed[_tail(rec)]))) / sync
+    ratio = abs(final_speed(rec)) / sync
     if not 0.0 < ratio < 0.9:
         return
     true_p = round(pole_pairs / ratio)
@@ -279,16 +290,17 @@ def settled(rec) -> bool:
     return abs(a - b) <= 0.02 * max(abs(b), 1e-12)
 
 
-def _ratio_check(path, column, what, ratio, plausible, possible, hint, steady: bool) -> None:
+def _ratio_check(path, column, what, ratio, plausible, possible, hint, steady: bool,
+                 against: str = "the nameplate's") -> None:
     """An error beyond ``possible`` (its lower end only for a record in its steady state: an
     unfinished start is slow and draws much current), a warning beyond ``plausible`` (steady only)."""
     low = possible[0] if steady else 0.0
     if low <= ratio <= possible[1]:
         if steady and not plausible[0] <= ratio <= plausible[1]:
-            warnings.warn(DataWarning.at(path, f"{what} is {ratio:.3g} times the nameplate's: {hint}", column=column),
+            warnings.warn(DataWarning.at(path, f"{what} is {ratio:.3g} times {against}: {hint}", column=column),
                           stacklevel=4)
         return
-    raise DataError(path, f"{what} is {ratio:.3g} times the nameplate's, which cannot be: {hint}", column=column)
+    raise DataError(path, f"{what} is {ratio:.3g} times {against}, which cannot be: {hint}", column=column)
 
 
 def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
@@ -304,22 +316,20 @@ def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
     icols = _columns(rec, "current")
     steady = settled(rec)
     current_hint = "are the currents in A (not mA or kA), and the probe's scale right?"
+    i_rms = abs(fundamental(i, t, w_e)) / math.sqrt(2.0) if abs(w_e) > 0 else math.nan
     if nameplate.get("current") and abs(w_e) > 0:
-        i_rms = abs(fundamental(i, t, w_e)) / math.sqrt(2.0)
-        ratio = i_rms / nameplate["current"]
-        _ratio_check(rec.source, icols, f"the steady-state current {i_rms:.4g} A rms", ratio, CURRENT_RATIO_PLAUSIBLE,
-                     CURRENT_RATIO_POSSIBLE, current_hint, steady)
+        _ratio_check(rec.source, icols, f"the steady-state current {i_rms:.4g} A rms", i_rms / nameplate["current"],
+                     CURRENT_RATIO_PLAUSIBLE, CURRENT_RATIO_POSSIBLE, current_hint, steady)
     elif nameplate.get("rated_power") and nameplate.get("voltage") and abs(w_e) > 0:
         # no rated current: the one a motor of this power and voltage can have (an error only)
-        i_rms = abs(fundamental(i, t, w_e)) / math.sqrt(2.0)
         apparent = nameplate["rated_power"] / (math.sqrt(3.0) * nameplate["voltage"])
         lo, hi = (apparent / x for x in reversed(RATED_EFFICIENCY_POWER_FACTOR))
         ratio = i_rms / hi if i_rms > hi else i_rms / lo if i_rms < lo else 1.0
-        if ratio > CURRENT_RATIO_POSSIBLE[1] or (steady and ratio < CURRENT_RATIO_POSSIBLE[0]):
-            motor = f"{nameplate['rated_power'] / 1e3:.3g} kW, {nameplate['voltage']:.4g} V motor"
-            raise DataError(rec.source, f"the steady-state current {i_rms:.4g} A rms is {ratio:.3g} times the rated "
-                                        f"current a {motor} can have ({lo:.3g}-{hi:.3g} A rms; the nameplate "
-                                        f"states no current), which cannot be: {current_hint}", column=icols)
+        motor = f"{nameplate['rated_power'] / 1e3:.3g} kW, {nameplate['voltage']:.4g} V motor"
+        _ratio_check(rec.source, icols, f"the steady-state current {i_rms:.4g} A rms", ratio, (0.0, math.inf),
+                     CURRENT_RATIO_POSSIBLE, current_hint, steady,
+                     against=f"the rated current a {motor} can have ({lo:.3g}-{hi:.3g} A rms; the nameplate states "
+                             "no current)")
     if nameplate.get("voltage") and abs(w_e) > 0:
         vcols = _columns(rec, "voltage")
         v_ll = abs(fundamental(rec.v_alpha[tail] + 1j * rec.v_beta[tail], t, w_e)) * math.sqrt(1.5)
@@ -331,7 +341,7 @@ def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
         _ratio_check(rec.source, vcols, f"the supply voltage {v_ll:.4g} V rms line-to-line", ratio,
                      VOLTAGE_RATIO_PLAUSIBLE, VOLTAGE_RATIO_POSSIBLE, hint, steady)
     if nameplate.get("speed") and rec.has_speed:
-        final = float(np.mean(rec.speed[tail]))
+        final = final_speed(rec)
         rated = nameplate["speed"] * math.pi / 30.0
         _ratio_check(rec.source, "speed", f"the final speed {final:.4g} rad/s", abs(final) / rated,
                      SPEED_RATIO_PLAUSIBLE, SPEED_RATIO_POSSIBLE,
@@ -339,8 +349,7 @@ def check_scales(rec, nameplate: dict | None, pole_pairs: int) -> None:
                      steady)
     if nameplate.get("rated_power") and rec.has_speed and steady:
         w_end = float(np.mean(np.abs(rec.speed[tail])))
-        power = 1.5 * (rec.v_alpha * rec.i_alpha + rec.v_beta * rec.i_beta)
-        energy = float(np.sum(power)) * float(np.median(np.diff(rec.t)))
+        energy = float(np.sum(input_power(rec))) * float(np.median(np.diff(rec.t)))
         if w_end > 0 and energy > 0:
             j_max = 2.0 * energy / w_end**2
             j_typ = J_TYPICAL * (nameplate["rated_power"] / 1e3) ** J_EXPONENT
@@ -360,9 +369,8 @@ def check_stator_resistance(rec, stator_dc_resistance: float | None, meta_path) 
     a resistance in milliohm): a DataError naming the key and the file. Needs no nameplate."""
     if not stator_dc_resistance or stator_dc_resistance <= 0:
         return
-    power = 1.5 * (rec.v_alpha * rec.i_alpha + rec.v_beta * rec.i_beta)
     copper = 1.5 * (rec.i_alpha**2 + rec.i_beta**2)
-    energy, squares = float(np.sum(power)), float(np.sum(copper))  # both times Ts: the ratio drops it
+    energy, squares = float(np.sum(input_power(rec))), float(np.sum(copper))  # both times Ts: the ratio drops it
     if not (squares > 0 and energy > 0):
         return  # no current, or a record that gives back more than it takes (a machine driven as a generator)
     ratio = stator_dc_resistance * squares / energy
