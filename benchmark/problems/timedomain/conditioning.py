@@ -43,7 +43,12 @@ import numpy as np
 
 from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke
-from benchmark.problems.timedomain.record_conditioning import condition_record, estimate_offsets, speed_offset_note
+from benchmark.problems.timedomain.record_conditioning import (
+    SPEED_OFFSET_ROUNDING,
+    condition_record,
+    estimate_offsets,
+    speed_offset_note,
+)
 from benchmark.problems.timedomain.switch_on import (
     SwitchingSteps,
     has_pretrigger,
@@ -115,7 +120,7 @@ def condition_dataset(ds: StartupDataset) -> StartupDataset:
     if stops and len(speed_offsets) == 1 and speed_offsets[0] != 0.0:
         # the same tachometer records the free stop: its rest offset is there too
         stops = [replace(st, speed=np.asarray(st.speed, float) - speed_offsets[0]) for st in stops]
-        if abs(speed_offsets[0]) >= 1e-9:  # else rounding of a speed at rest (speed_offset_note)
+        if abs(speed_offsets[0]) >= SPEED_OFFSET_ROUNDING:  # else a speed that reads zero at rest
             lines.append(f"stop record: the start-up's speed offset {speed_offsets[0]:+.4g} rad/s removed "
                          "(same sensor)")
     # restored samples are what the model's linear interpolation must see: written back, they

@@ -93,10 +93,14 @@ def long_run_std(e: np.ndarray, n_blocks: int = 20) -> float:
     return float(max(math.sqrt(L * np.var(means, ddof=1)), np.std(e)))
 
 
+#: A speed's rest offset below this (rad/s) is the rounding of a speed that reads zero at rest.
+SPEED_OFFSET_ROUNDING = 1e-9
+
+
 def speed_offset_note(offset: float) -> str:
     """The report's line for the speed's rest offset (rad/s) removed: a speed at rest whose mean is
-    rounding (below 1e-9 rad/s) has none to speak of."""
-    if abs(offset) < 1e-9:
+    rounding (below :data:`SPEED_OFFSET_ROUNDING`) has none to speak of."""
+    if abs(offset) < SPEED_OFFSET_ROUNDING:
         return "speed at rest before switch-on reads zero: no offset"
     return f"speed offset {offset:+.4g} rad/s (rest before switch-on) removed"
 
