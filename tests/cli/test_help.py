@@ -18,7 +18,7 @@ ENTRY_POINTS = {  # module: keys its help must name
                            "budget=8000"],
     "synthetic": ["out=", "effects=[]", "effect_size=null"],
     "benchmark.blind": ["source=own", "n=30", "free_share=0.34", "workdir=outputs/blind"],
-    "benchmark.blind_admittance": ["n=60", "seed=2024", "none_weight=1.0"],
+    "benchmark.blind_admittance": ["n=60", "seed=2024", "free_share=null"],
 }
 
 
