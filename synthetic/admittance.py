@@ -17,7 +17,9 @@ curves give; the capacitance, i.e. the heating scale, stays unknown to the ident
 
 Noise (``run['noise']['admittance_fraction']``): white Gaussian noise of standard deviation ``fraction *
 full_scale_admittance`` on G and on B, and ``fraction * full_scale_torque`` on the torque, from
-``numpy.random.default_rng(noise.seed)``. DC resistances are exact (a four-wire measurement).
+``numpy.random.default_rng(noise.seed)``; with ``noise.admittance_reading_fraction`` also noise of standard
+deviation ``reading_fraction * |Y|`` on G and on B of each reading (an instrument's error as a share of its
+reading), drawn after the full-scale noise. DC resistances are exact (a four-wire measurement).
 
 Unmodelled effects (``run.effects``, ``effect_size``, ``effect_form``; the catalogue of
 :mod:`benchmark.problems.admittance.effects`): with ``effects`` named, the data hold exactly those effects on the
@@ -319,6 +321,10 @@ def make_dataset(run) -> tuple[AdmittanceData, dict]:
     G = Y.real + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
     B = Y.imag + (rng.normal(0.0, frac * fs, len(s)) if frac > 0 else 0.0)
     torque = T + (rng.normal(0.0, frac * fs_T, len(s)) if frac > 0 else 0.0)
+    reading_frac = float(_sel(run, "noise.admittance_reading_fraction", 0.0))
+    if reading_frac > 0:
+        G = G + rng.normal(0.0, 1.0, len(s)) * reading_frac * np.abs(Y)
+        B = B + rng.normal(0.0, 1.0, len(s)) * reading_frac * np.abs(Y)
 
     # the DC readings see the stator copper only (R1, not R1sigma)
     R_dc = (
@@ -370,6 +376,7 @@ def make_dataset(run) -> tuple[AdmittanceData, dict]:
         },
         "noise": {
             "admittance_fraction": frac,
+            "admittance_reading_fraction": reading_frac,
             "seed": seed,
             "full_scale_admittance": fs,
             "full_scale_torque": fs_T,
