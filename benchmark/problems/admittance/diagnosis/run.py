@@ -114,11 +114,22 @@ def render_sweep_markdown(doc: dict) -> str:
             f"| {r['effect']} | {100 * r['heldout_reduction']:.1f} % "
             f"| {100 * r['in_sample_reduction']:.1f} % | {r['criterion']:.1f} | {extra} |"
         )
-    nl = doc["noise_level"]
-    lines += [
-        "",
-        f"Noise estimated from the data: G {nl['G_S']:.3g} S, B {nl['B_S']:.3g} S "
-        f"({nl['percent_of_full_scale']:.4f} % of full scale).",
-        "",
-    ]
+    lines += ["", noise_sentence(doc["noise_level"]), ""]
     return "\n".join(lines)
+
+
+def noise_sentence(nl: dict) -> str:
+    """What the report says of the noise: given or estimated, its level, and how it grows with the reading."""
+    if nl.get("source") == "given":
+        return f"Noise given (admittance_diagnosis.noise): {nl['G_S']:.3g} S on G and on B."
+    text = (
+        f"Noise estimated from the data: G {nl['G_S']:.3g} S, B {nl['B_S']:.3g} S "
+        f"({nl['percent_of_full_scale']:.4f} % of full scale, RMS over the readings)"
+    )
+    if nl.get("proportional_share", 0.0) > 0:
+        text += (
+            f"; it grows with the reading: {nl['constant_S']:.3g} S plus {100 * nl['reading_fraction']:.3g} % of "
+            f"|Y| (in quadrature), {100 * nl['proportional_share']:.0f} % of its variance proportional"
+        )
+    return text + "."
+

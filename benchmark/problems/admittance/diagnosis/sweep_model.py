@@ -5,7 +5,7 @@ bounds and starts)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -31,7 +31,7 @@ class SweepData:
     levels: np.ndarray  # the voltage levels, V
     time: np.ndarray | None
     full_scale: float
-    sigma: float = 1.0
+    sigma: float | np.ndarray = 1.0  # the noise's standard deviation on G and B, S: one or per reading
 
     @classmethod
     def from_data(cls, d: AdmittanceData) -> SweepData:
@@ -81,24 +81,92 @@ class SweepData:
         }
 
 
-def noise_estimate(data: SweepData, residual: np.ndarray, floor: float) -> dict[str, float]:
-    """Standard deviation of the noise on G and on B (S) from the base residual: within each sweep
-    table, in slip order, third differences (a smooth model error is suppressed, white noise has
-    variance ``20 sigma^2`` there), robustly through the median absolute value."""
-    out = {}
-    for name, r in (("G", residual.real), ("B", residual.imag)):
-        d = []
-        for k in np.unique(data.sweep):
-            m = np.flatnonzero(data.sweep == k)
-            m = m[np.argsort(data.s[m], kind="stable")]
-            if len(m) >= 8:
-                d.append(np.diff(r[m], 3))
-        d = np.concatenate(d) if d else np.diff(r, 3)
-        sigma = 1.4826 * float(np.median(np.abs(d))) / math.sqrt(20.0)
-        out[name] = max(sigma, floor * data.full_scale)
-    return out
+@dataclass(frozen=True)
+class SweepNoise:
+    """The readings' noise: standard deviation ``sigma_k = sqrt(level^2 ((1 - p) + p |Y_k|^2 / m))`` on G and on
+    B of reading ``k`` (S), ``m`` the mean ``|Y|^2``: a constant part (an instrument's share of its range) and a
+    part proportional to the reading (its share of the reading), ``p`` the proportional part's share."""
+
+    per_reading: np.ndarray  # sigma_k, S
+    G_S: float  # G's level at a reading of mean |Y|^2, S
+    B_S: float
+    proportional_share: float  # p, 0 = constant noise, 1 = a share of each reading
+    constant_S: float  # sqrt(level^2 (1 - p)), S
+    reading_fraction: float  # sqrt(level^2 p / m), standard deviation per unit |Y|
+    allowed: tuple[np.ndarray, ...] = ()  # sigma_k of every shape the data do not tell apart from this one
 
 
+def _third_differences(data: SweepData, residual: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Third differences of the residual (complex) within each sweep table in slip order, and the readings
+    each one spans (four columns); a table of fewer than eight readings is left out unless all are."""
+    d, idx = [], []
+    for k in np.unique(data.sweep):
+        m = np.flatnonzero(data.sweep == k)
+        m = m[np.argsort(data.s[m], kind="stable")]
+        if len(m) >= 8:
+            d.append(np.diff(residual[m], 3))
+            idx.append(np.stack([m[:-3], m[1:-2], m[2:-1], m[3:]], axis=1))
+    if not d:
+        m = np.arange(data.n)
+        return np.diff(residual, 3), np.stack([m[:-3], m[1:-2], m[2:-1], m[3:]], axis=1)
+    return np.concatenate(d), np.concatenate(idx)
+
+
+#: Two log-likelihoods this far apart (twice the difference; chi^2 of one degree of freedom at 95 %) are
+#: noise shapes the data tell apart.
+SHAPE_INTERVAL = 3.84
+
+
+def noise_estimate(data: SweepData, residual: np.ndarray, floor: float) -> SweepNoise:
+    """The noise of G and B (S) from the base residual: within each sweep table, in slip order, third
+    differences (a smooth model error is suppressed; white noise of standard deviations ``sigma_k`` has
+    variance ``sigma_j^2 + 9 sigma_{j+1}^2 + 9 sigma_{j+2}^2 + sigma_{j+3}^2`` there).
+
+    The shape across readings, the share ``p`` of :class:`SweepNoise`: the Gaussian likelihood of the
+    differences (G's and B's together) is profiled over ``p`` (a log grid of the corner ``|Y|`` where the two
+    parts are equal, and both pure forms), its maximum is the estimate; ``allowed`` holds the noise of every
+    shape the data do not tell apart from it (:data:`SHAPE_INTERVAL`), for a gap to be claimed only where
+    each of them leaves one. The level is robust: the median absolute difference over its standard
+    deviation under the shape, for G and for B. With ``p = 0`` it is the median of
+    ``|third difference| / sqrt(20)``, one level for all readings."""
+    d, idx = _third_differences(data, residual)
+    y2 = np.abs(data.Y) ** 2
+    m = float(np.mean(y2)) or 1.0
+    spanned = y2[idx] @ np.array([1.0, 9.0, 9.0, 1.0]) / m  # sum of c_i^2 |Y|^2 / m over each difference
+    d2 = np.concatenate([d.real, d.imag]) ** 2
+    lowest = floor * data.full_scale
+
+    def profile(p: float) -> float:
+        h = np.tile(np.maximum(20.0 * (1.0 - p) + p * spanned, 1e-300), 2)
+        return float(np.sum(np.log(h)) + len(h) * np.log(np.mean(d2 / h)))
+
+    def noise(p: float) -> SweepNoise:
+        h = 20.0 * (1.0 - p) + p * spanned
+        level = {  # (with p = 0 the scaling is exactly 1: the former single level to the last bit)
+            name: max(1.4826 * float(np.median(np.abs(part) * np.sqrt(20.0 / h))) / math.sqrt(20.0), lowest)
+            for name, part in (("G", d.real), ("B", d.imag))
+        }
+        pooled = math.sqrt(0.5 * (level["G"] ** 2 + level["B"] ** 2))
+        return SweepNoise(
+            per_reading=np.maximum(pooled * np.sqrt((1.0 - p) + p * y2 / m), lowest),
+            G_S=level["G"],
+            B_S=level["B"],
+            proportional_share=p,
+            constant_S=pooled * math.sqrt(1.0 - p),
+            reading_fraction=pooled * math.sqrt(p / m),
+        )
+
+    y = np.sqrt(y2[y2 > 0]) if np.any(y2 > 0) else np.ones(1)
+    corners = np.logspace(math.log10(y.min() / 10), math.log10(y.max() * 10), 121)
+    shares = np.concatenate([[0.0], m / (corners[::-1] ** 2 + m), [1.0]])
+    likelihood = np.array([profile(q) for q in shares])
+    allowed = tuple(noise(float(q)).per_reading for q in shares[likelihood <= likelihood.min() + SHAPE_INTERVAL])
+    return replace(noise(float(shares[int(np.argmin(likelihood))])), allowed=allowed)
+
+
+def given_noise(data: SweepData, sigma: float) -> SweepNoise:
+    """A noise level the user gives (``admittance_diagnosis.noise``): the same on every reading."""
+    return SweepNoise(np.full(data.n, float(sigma)), float(sigma), float(sigma), 0.0, float(sigma), 0.0)
 
 
 class SweepModel:
@@ -132,8 +200,9 @@ class SweepModel:
     def residual_complex(self, x, mask=None) -> np.ndarray:
         """(model - measured)/sigma per reading, complex (G + jB)."""
         Ym = self.data.Y if mask is None else self.data.Y[mask]
+        sigma = self.data.sigma if mask is None or np.ndim(self.data.sigma) == 0 else self.data.sigma[mask]
         with np.errstate(all="ignore"):
-            return (self.admittance(x, mask) - Ym) / self.data.sigma
+            return (self.admittance(x, mask) - Ym) / sigma
 
     def residuals(self, x, mask=None) -> np.ndarray:
         e = self.residual_complex(x, mask)
