@@ -10,7 +10,9 @@ and plain-English warnings, computed once at the final point of a run.
   supply period in samples): the scores of a machine record are modulated at the supply
   frequency, and the AR(1) plug-in reads white + AR(1) bench noise as nearly white (zoo study:
   coverage of the 95 % intervals 70 % with the plug-in alone, 90 % with the floor, coloured
-  noise; 98 % either way with white noise). These ``2 n_var``
+  noise; 98 % either way with white noise). A problem whose residuals are over their readings' stated
+  standard errors (``problem.stated_noise``: a motor's test report) takes ``(J'J)^-1`` instead, times the
+  reduced chi^2 where it exceeds 1 (:func:`benchmark.core.uncertainty.stated_noise_covariance`). These ``2 n_var``
   evaluations are not counted in the optimiser's budget: the record says so.
 * **Fit quality** (:func:`fit_quality`): per channel, the RMS of the held-in residual over the
   channel's noise estimated from the data alone (the problem's ``fit_channels``: a steady-state
@@ -38,6 +40,7 @@ from benchmark.core.uncertainty import (
     hac_covariance_floored,
     misfit_ratio,
     standard_errors,
+    stated_noise_covariance,
     uncertainty_warnings,
 )
 
@@ -69,6 +72,10 @@ def jacobian(problem, x, rel_step: float = JACOBIAN_REL_STEP) -> tuple[np.ndarra
     return r0, J
 
 
+STATED_METHOD = ("(J'J)^-1 of the residuals over the readings' stated standard errors at the final point, "
+                 "times the reduced chi^2 where it exceeds 1 (the stated errors too small for the misfit)")
+
+
 def parameter_uncertainty(problem, x) -> dict:
     """Standard errors, correlation and the method of a least-squares problem at ``x``.
 
@@ -93,9 +100,13 @@ def parameter_uncertainty(problem, x) -> dict:
         raise ValueError("too few informative residuals for a covariance")
     floor_fn = getattr(problem, "hac_bandwidth_floor", None)
     floor = float(floor_fn()) if floor_fn is not None else 0.0
+    stated = bool(getattr(problem, "stated_noise", False))
     with _warnings.catch_warnings(record=True) as caught:
         _warnings.simplefilter("always")
-        cov, info = hac_covariance_floored(Jl, rl, groups=gl, floor=floor)
+        if stated:
+            cov, info = stated_noise_covariance(Jl, rl)
+        else:
+            cov, info = hac_covariance_floored(Jl, rl, groups=gl, floor=floor)
     se = standard_errors(cov)
     if info.rank < info.k:
         involved = np.flatnonzero(np.abs(info.null_space).max(axis=1) > 1e-3)
@@ -110,8 +121,9 @@ def parameter_uncertainty(problem, x) -> dict:
         "standard_error": {n: (float(s) if np.isfinite(s) else None) for n, s in zip(names, se, strict=True)},
         "correlation": [[(float(c) if np.isfinite(c) else None) for c in row] for row in corr],
         "info": {
-            "method": "HAC sandwich (Newey-West, Andrews bandwidth, VAR(1) prewhitening) on the residual "
-                      "Jacobian at the final point, per residual channel",
+            "method": (STATED_METHOD if stated else
+                       "HAC sandwich (Newey-West, Andrews bandwidth, VAR(1) prewhitening) on the residual "
+                       "Jacobian at the final point, per residual channel"),
             "jacobian": f"central differences (one-sided at a bound), relative step {JACOBIAN_REL_STEP:g}",
             "evaluations": 2 * J.shape[1] + 1,
             "nuisance": (None if nuisance is None else

@@ -98,6 +98,40 @@ def _prewhiten(series: list[np.ndarray], k: int) -> tuple[list[np.ndarray], np.n
     return [s[1:] - s[:-1] @ A.T for s in series if len(s) > 1], np.linalg.inv(np.eye(k) - A)
 
 
+def _bread(J: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+    """``(J'J)^-1`` of the column-scaled Jacobian (the pseudo-inverse when its rank is short, with a
+    :class:`RuntimeWarning`), the column scales, the rank and the null space's basis."""
+    k = J.shape[1]
+    scale = np.linalg.norm(J, axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    _, sv, Vt = np.linalg.svd(J / scale, full_matrices=False)
+    keep = sv > rcond * (sv[0] if len(sv) and sv[0] > 0 else 1.0)
+    rank = int(keep.sum())
+    inv_sv2 = np.where(keep, 1.0 / np.where(keep, sv, 1.0) ** 2, 0.0)
+    null = Vt[~keep].T
+    if rank < k:
+        involved = np.flatnonzero(np.abs(null).max(axis=1) > 1e-3)
+        warnings.warn(f"Jacobian has rank {rank} of {k}: parameters {involved.tolist()} (0-based) are not "
+                      "separately identifiable; their covariance is the pseudo-inverse one (standard errors "
+                      "along the null direction are not finite)", RuntimeWarning, stacklevel=3)
+    return (Vt.T * inv_sv2) @ Vt, scale, rank, null
+
+
+def stated_noise_covariance(jac, residuals, *, rcond=1e-7) -> tuple[np.ndarray, HACInfo]:
+    """Covariance of least-squares parameters whose residuals are already divided by their readings' stated
+    standard errors (an instrument's accuracy): ``(J'J)^-1``, times the reduced chi^2 ``sum r^2 / (n - k)``
+    where it exceeds 1 (the stated errors are then too small for the misfit: Birge's ratio). A few readings
+    each with its own error (a motor's test report) are what a sandwich cannot estimate: one reading that
+    alone fixes a parameter has a residual near zero however large its error."""
+    J = np.asarray(jac, dtype=float)
+    r = np.asarray(residuals, dtype=float).ravel()
+    n, k = J.shape
+    bread, scale, rank, null = _bread(J, rcond)
+    chi2 = float(r @ r) / (n - k) if n > k else 1.0
+    cov = bread * max(1.0, chi2) / np.outer(scale, scale)
+    return cov, HACInfo(0.0, 0, rank, k, (), False, null)
+
+
 def hac_covariance(jac, residuals, groups=None, bandwidth=None, *, aligned=None, prewhiten=True,
                    dof_correction=True, rcond=1e-7, return_info=False):
     """Heteroscedasticity- and autocorrelation-consistent covariance of least-squares parameters.
@@ -149,19 +183,7 @@ def hac_covariance(jac, residuals, groups=None, bandwidth=None, *, aligned=None,
     n, k = J.shape
     if r.shape != (n,):
         raise ValueError(f"residuals has {r.size} entries, jac has {n} rows")
-    scale = np.linalg.norm(J, axis=0)
-    scale = np.where(scale > 0, scale, 1.0)
-    _, sv, Vt = np.linalg.svd(J / scale, full_matrices=False)
-    keep = sv > rcond * (sv[0] if len(sv) and sv[0] > 0 else 1.0)
-    rank = int(keep.sum())
-    inv_sv2 = np.where(keep, 1.0 / np.where(keep, sv, 1.0) ** 2, 0.0)
-    bread = (Vt.T * inv_sv2) @ Vt
-    null = Vt[~keep].T
-    if rank < k:
-        involved = np.flatnonzero(np.abs(null).max(axis=1) > 1e-3)
-        warnings.warn(f"Jacobian has rank {rank} of {k}: parameters {involved.tolist()} (0-based) are not "
-                      "separately identifiable; their covariance is the pseudo-inverse one (standard errors "
-                      "along the null direction are not finite)", RuntimeWarning, stacklevel=2)
+    bread, scale, rank, null = _bread(J, rcond)
     score = J / scale * r[:, None]
     segs = _segments(groups, n)
     lengths = {b - a for a, b in segs}

@@ -20,6 +20,7 @@ from benchmark.core.uncertainty import (
     hac_covariance,
     misfit_ratio,
     standard_errors,
+    stated_noise_covariance,
     uncertainty_warnings,
     white_covariance,
 )
@@ -238,3 +239,40 @@ def test_a_standard_error_on_a_value_near_zero_is_not_a_huge_percentage():
     assert w == ["a is not identifiable from these data: standard error 0.05 ohm is more than 1000 times its"
                  " value 1e-36 ohm (limit 50 %)",
                  "b is not identifiable from these data: standard error 1.5 is 75 % of its value 2 (limit 50 %)"]
+
+
+def report_design(rng, sigma):
+    """A test report's shape: 16 readings that share two parameters and one reading that alone fixes a
+    third (a locked-rotor test), each residual over its reading's stated standard error ``sigma``."""
+    X = np.zeros((17, 3))
+    X[:16, 0] = 1.0
+    X[:16, 1] = np.linspace(-1, 1, 16)
+    X[16, 2] = 1.0
+    b = np.array([1.0, 0.5, 2.0])
+    y = X @ b + sigma * rng.standard_normal(17)
+    bh = np.linalg.lstsq(X, y, rcond=None)[0]
+    return X, b, bh, y - X @ bh
+
+
+@pytest.mark.parametrize("actual", [1.0, 3.0])
+def test_stated_errors_cover_the_reading_that_alone_fixes_a_parameter(actual):
+    """Residuals over stated errors of 1, the actual noise 1 or 3 times them: (J'J)^-1, widened by the
+    reduced chi^2 (of the shared readings' scatter), covers every parameter; the sandwich gives the lone
+    reading's parameter a standard error of zero (its residual is zero), and the stated rule does not."""
+    rng = np.random.default_rng(4)
+    hits, hits_hac = np.zeros(3), np.zeros(3)
+    for _ in range(400):
+        X, b, bh, r = report_design(rng, actual)
+        cov, info = stated_noise_covariance(X, r)
+        assert info.rank == 3
+        if float(r @ r) / 14 <= 1.0:
+            assert np.allclose(cov, np.linalg.inv(X.T @ X))  # the stated errors as they are, never narrowed
+        hits += np.abs(bh - b) <= 1.96 * standard_errors(cov)
+        hits_hac += np.abs(bh - b) <= 1.96 * standard_errors(hac_covariance(X, r, bandwidth=1.0))
+    cover = hits / 400
+    print("coverage of the 95 % intervals", cover, "sandwich", hits_hac / 400)
+    # 1.96 standard errors cover 95 % when the stated errors hold, 93 % (Student's t, 14 degrees of freedom)
+    # when the scatter sets them; three standard errors of a share of 400 draws below that
+    lowest = 0.95 - 0.033 if actual == 1.0 else 0.93 - 0.038
+    assert np.all((cover >= lowest) & (cover <= 0.99)), cover
+    assert hits_hac[2] / 400 < 0.05  # the sandwich: zero

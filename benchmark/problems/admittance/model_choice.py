@@ -8,7 +8,9 @@ judged on two counts:
 * **information criterion**: Schwarz's BIC, ``n ln(S^2) + k ln(n)`` with ``S^2`` the cost
   (the mean squared misfit of the n residuals) and k the searched parameters: a term must pay
   for itself in misfit;
-* **identifiability from the Jacobian** at the fit: the textbook covariance ``s^2 (J'J)^-1``
+* **identifiability from the Jacobian** at the fit: the textbook covariance ``s^2 (J'J)^-1`` (a test
+  report, whose residuals are over its readings' stated errors: ``(J'J)^-1`` times the reduced chi^2 where
+  it exceeds 1, the rule of the run's table, :func:`benchmark.core.uncertainty.stated_noise_covariance`)
   (rank-deficient directions count as infinite variance) gives each parameter's relative
   standard error and the correlations. A candidate's terms beyond the tied 6-parameter circuit
   (the free ``X2``; ``R2sigma``, ``X3``) must each be fixed by the data: relative standard error
@@ -35,7 +37,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from benchmark.core.quality import jacobian
-from benchmark.core.uncertainty import correlation, white_covariance
+from benchmark.core.uncertainty import correlation, stated_noise_covariance, white_covariance
 
 __all__ = ["CandidateFit", "ModelChoice", "fit_candidate", "choose_model", "CANDIDATES"]
 
@@ -68,6 +70,7 @@ class CandidateFit:
     evaluations: int
     extra_fixed: bool = True
     reasons: list[str] = field(default_factory=list)
+    stated_noise: bool = False  # residuals over the readings' stated errors (a test report)
 
     @property
     def label(self) -> str:
@@ -93,7 +96,7 @@ def _identifiability(problem, x) -> tuple[dict[str, float], np.ndarray]:
     scale = np.where(np.abs(x) > 0, np.abs(x), 1e-3 * (problem.upper - problem.lower))
     sv, vt = np.linalg.svd(J * scale, full_matrices=False)[1:]
     null = sv <= sv.max() * 1e-9 if sv.size and sv.max() > 0 else np.ones(len(x), bool)
-    cov = white_covariance(J, r)
+    cov = stated_noise_covariance(J, r)[0] if getattr(problem, "stated_noise", False) else white_covariance(J, r)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     if null.any():
         se[np.abs(vt[null]).max(axis=0) > 1e-3] = np.inf
@@ -137,7 +140,8 @@ def fit_candidate(problem, model: int, tie: bool, warm: dict | None = None) -> C
     with np.errstate(all="ignore"):
         rel, corr = _identifiability(problem, x)
     fit = CandidateFit(model, tie, tuple(problem.parameter_names), x, float(problem.evaluate(x[None])[0]),
-                       2 * problem.data.n, rel, corr, evaluations + 2 * len(x) + 1)
+                       2 * problem.data.n, rel, corr, evaluations + 2 * len(x) + 1,
+                       stated_noise=bool(getattr(problem, "stated_noise", False)))
     for name in EXTRA[(model, tie)]:
         if not rel[name] <= EXTRA_MAX:
             p = fit.partner(name)
@@ -190,8 +194,10 @@ class ModelChoice:
 
     def warnings(self) -> list[str]:
         stated = self.not_fixed()
-        return [f"model choice ({self.chosen.label}; standard errors of its own least-squares fit, white-noise "
-                "ones, not the table's HAC ones of the run): " + "; ".join(stated)] if stated else []
+        covariance = ("from the readings' stated errors, as the table's" if self.chosen.stated_noise
+                      else "white-noise ones, not the table's HAC ones of the run")
+        return [f"model choice ({self.chosen.label}; standard errors of its own least-squares fit, "
+                f"{covariance}): " + "; ".join(stated)] if stated else []
 
     def record(self) -> dict:
         return {

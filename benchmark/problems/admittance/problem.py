@@ -135,6 +135,8 @@ class AdmittanceProblem(Problem):
             raise ConfigError("problem.normalisation: 'instrument' needs a load test (kind: loadtest), whose "
                               "readings carry their standard errors")
         self.normalisation = normalisation
+        #: residuals over the readings' stated standard errors: the covariance is (J'J)^-1, not a sandwich
+        self.stated_noise = normalisation == "instrument"
         self.tie_x1_x2 = bool(tie_x1_x2)
         self.parameter_names = parameter_names_for(self.model, self.tie_x1_x2)
         self.lower = np.asarray(lower, float)
