@@ -125,6 +125,7 @@ def test_no_gap_is_claimed_where_a_noise_shape_the_data_allow_leaves_none():
     `unexplained`. A shape within the 95 % interval puts it inside: `no_gap`."""
     from benchmark.analysis import blind
     from benchmark.blind_admittance import draw_sets, set_config
+    from benchmark.problems.admittance.diagnosis.run import render_sweep_markdown
 
     cfg = compose_config(["n=60", "seed=2024", "noise.admittance_fraction=0.0001",
                           "noise.admittance_reading_fraction=0.001"], name="blind_admittance")
@@ -137,3 +138,5 @@ def test_no_gap_is_claimed_where_a_noise_shape_the_data_allow_leaves_none():
     assert doc["noise_level"]["proportional_share"] > 0.95
     assert doc["gap_before"]["heldout_rms_over_noise"] > upper > doc["lenient_heldout_rms_over_noise"]
     assert doc["status"] == "no_gap" and doc["effects"] == []
+    doc.pop("_models")
+    assert "No gap is claimed: under a noise shape the data allow" in render_sweep_markdown(doc | {"data": "set 5"})
