@@ -17,7 +17,9 @@ sign-flipped and repeated over the record; white noise only when neither exists.
 conditioning that turns point samples into interval means, for instance, colours the noise
 (lag-one correlation -0.25), which a white realisation of the same spread would overstate
 by a third. Its relative uncertainty is the voltage noise estimate's plus the realisations'
-spread.
+spread: the record's own voltage noise is one realisation, whose effect on the currents varies about the
+realisations' mean by that spread (a cold user's grid starts: 0.020-0.027 A across noise draws where the
+spread of the mean alone, a third of it, claimed +-2 %).
 Inverter records (``zoh``: the switch-state voltages from the DC link and the gates) carry no
 measurement noise and are left unchanged. Part of the one noise estimate
 (:mod:`benchmark.problems.timedomain.noise`): the identification's fit quality and the
@@ -102,16 +104,20 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
             power[ch].append(float(np.mean(d[np.isfinite(d)] ** 2)))
     u_v = max(vn["v_alpha"].rel_uncertainty, vn["v_beta"].rel_uncertainty)
     noise = dict(noise)
-    added = {}
+    added, spreads = {}, {}
     for ch, p in power.items():
         p = np.asarray(p)
         var_p = float(np.mean(p))
         if not np.isfinite(var_p) or var_p <= 0.0:
             continue
-        u_p = math.hypot(u_v, float(np.std(p)) / var_p / (2.0 * math.sqrt(len(p))))
+        # the record's propagated power is one realisation: it varies about the realisations' mean by their
+        # spread (relative spread of the power, half that of its root), and that mean is known to 1/sqrt(n)
+        spread = float(np.std(p)) / var_p / 2.0
+        u_p = math.hypot(u_v, spread * math.sqrt(1.0 + 1.0 / len(p)))
         old = noise[ch]
         var = old.std**2 + var_p
         added[ch] = math.sqrt(var_p)
+        spreads[ch] = u_p
         noise[ch] = NoiseEstimate(math.sqrt(var), (old.std**2 * old.rel_uncertainty + var_p * u_p) / var,
                                   old.n_effective,
                                   f"{old.method}; with the measured voltage's noise through the model "
@@ -119,6 +125,7 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
     record = {"voltage_std": {ch: float(v.std) for ch, v in vn.items()},
               "voltage_method": vn["v_alpha"].method + ("" if templates else "; white realisations"),
               "propagated_std": added,
+              "propagated_rel_uncertainty": spreads,
               "realisations": REALISATIONS}
     return noise, record
 
