@@ -35,6 +35,7 @@ from benchmark.problems.timedomain.channel_timing import (
 )
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
 from benchmark.problems.timedomain.load_checks import check_records, check_speed_plausibility
+from benchmark.problems.timedomain.rotation import turn_forwards
 from benchmark.problems.timedomain.speed_filter import parse_speed_filter
 from benchmark.problems.timedomain.stator_prior import WINDING_TEMPERATURE_RANGE_C
 
@@ -257,6 +258,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
     check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"),
                   optional.get("stator_dc_resistance"))
+    startups, stops, turned = turn_forwards(startups, stops, skew, meta_path)
     ds = StartupDataset(
         pole_pairs=p,
         sample_time=ts,
@@ -265,6 +267,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         input_hold=hold,
         chord_voltage=chord,
         folder=str(folder),
+        conditioning=[turned] if turned else [],
         **optional,
     )
     if conditioning_on:

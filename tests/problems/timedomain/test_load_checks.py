@@ -75,17 +75,61 @@ def test_swapped_s_and_t_voltage_labels(grid_start):
 
 def test_swapped_current_labels_are_told_with_the_fix_that_restores_the_record(grid_start):
     """i_r and i_s swapped: the message named the voltages' S and T, and once they were swapped as
-    told, a second error asked to rotate the voltage labels (a cold user's two rounds). The swap
-    whose current lags by a motor's angle is v_r and v_s, the same relabelling as i_r and i_s."""
+    told, a second error asked to rotate the voltage labels (a cold user's two rounds). The rotor turns
+    with the voltage, so the currents are the pair mislabelled (without a speed the message names both
+    pairs: the same relabelling)."""
     folder = _mistake(grid_start, "swapped_currents")
     _rename_header(folder, {"i_r": "i_s", "i_s": "i_r"})
     msg = _error(_cli(folder))
-    assert "phase sequences disagree" in msg and "swap the columns i_r and i_s, or else v_r and v_s" in msg
+    assert f"{folder / 'startup.csv'}, column 'i_r, i_s'" in msg
+    assert "phase sequences disagree" in msg and "the currents are mislabelled: swap the columns i_r and i_s" in msg
     lag = float(re.search(r"then the current lags the voltage by (-?\d+) degrees", msg).group(1))
     _rename_header(folder, {"i_r": "i_s", "i_s": "i_r"})  # done as the message says
     fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
     assert np.array_equal(fixed.i_alpha, ok.i_alpha) and np.array_equal(fixed.i_beta, ok.i_beta)
     assert 0 < lag < 90
+
+
+def test_a_current_column_holding_phase_t_is_told_by_the_speed(grid_start):
+    """The i_s column holds phase T's current (a cold user's bench): the message said to swap the voltages'
+    S and T, then to negate the speed, and the record that followed turned backwards. The speed turns with
+    the voltage: the currents are mislabelled, and the fix is the current phase S from the two recorded."""
+    folder = _mistake(grid_start, "phase_t_current")
+    table = pd.read_csv(folder / "startup.csv")
+    table["i_s"] = -(table["i_r"] + table["i_s"])
+    table.to_csv(folder / "startup.csv", index=False)
+    msg = _error(_cli(folder))
+    assert f"{folder / 'startup.csv'}, column 'i_r, i_s'" in msg
+    assert "the currents are mislabelled: i_s holds phase T's current: replace the column i_s by -(i_r + i_s)" in msg
+    table["i_s"] = -(table["i_r"] + table["i_s"])  # done as the message says
+    table.to_csv(folder / "startup.csv", index=False)
+    fixed, ok = load_startup_dataset(folder).startups[0], load_startup_dataset(grid_start).startups[0]
+    assert np.allclose(fixed.i_beta, ok.i_beta, rtol=0, atol=1e-9 * np.max(np.abs(ok.i_beta)))
+
+
+def test_a_motor_started_in_reverse_is_mirrored_to_the_forward_records(grid_start):
+    """The supply's phases S and T exchanged, so the motor starts backwards, the speed negative (a
+    physically valid record): the derived bounds excluded the truth and a cold user's reverse start gave
+    Rs 81 % low, `converged`. Now the records are mirrored on reading and equal the forward ones."""
+    forward, folder = _mistake(grid_start, "forward_with_stop"), _mistake(grid_start, "reverse")
+    t = np.arange(0.0, 3.0, 1e-3)
+    pd.DataFrame({"t": t, "speed": 150.0 * np.exp(-t / 0.8) - 5.0 * t}).to_csv(forward / "stop.csv", index=False)
+    table = pd.read_csv(folder / "startup.csv")
+    table["v_s"], table["v_t"] = table["v_t"].copy(), table["v_s"].copy()
+    table["i_s"] = -(table["i_r"] + table["i_s"])  # phase T's current under the column of the first two
+    table["speed"] *= -1.0
+    table.to_csv(folder / "startup.csv", index=False)
+    stop = pd.read_csv(forward / "stop.csv")
+    stop["speed"] *= -1.0
+    stop.to_csv(folder / "stop.csv", index=False)
+    turned, ok = load_startup_dataset(folder), load_startup_dataset(forward)
+    assert any("turns backwards" in line and "mirrored" in line for line in turned.conditioning)
+    assert not any("turns backwards" in line for line in ok.conditioning)
+    a, b = turned.startups[0], ok.startups[0]
+    for name in ("v_alpha", "v_beta", "i_alpha", "i_beta", "speed"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert np.allclose(x, y, rtol=0, atol=1e-9 * np.max(np.abs(y))), name
+    assert np.array_equal(turned.stops[0].speed, ok.stops[0].speed)
 
 
 @pytest.mark.parametrize("labels", [("v_s", "v_t", "v_r"), ("v_t", "v_r", "v_s")])
