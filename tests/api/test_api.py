@@ -99,6 +99,9 @@ def test_the_result_reads_writes_and_exports(tmp_path):
     assert float(mat["Rs"]) == r.estimate["Rs"] and str(mat["units"]["Rs"]) == "ohm"
     assert float(mat["standard_error"]["Ls"]) == r.standard_error["Ls"] and np.isnan(float(mat["standard_error"]["fv"]))
     assert [str(n) for n in mat["parameter_names"]] == list(r.correlation.index)
+    # a run read back from its folder knows its pole pairs (it wrote 0 to the .mat, and motulator refused)
+    assert again.pole_pairs == r.pole_pairs == 1  # the paper's motor
+    assert int(scipy.io.loadmat(again.to_mat(tmp_path / "read_back"), squeeze_me=True)["pole_pairs"]) == 1
     figures = r.figures()
     assert set(figures) == {"startup", "startup_zoom", "stop"} and figures["startup"].axes
 

@@ -360,6 +360,7 @@ class TimeDomainProblem(SwitchOnFlux, StatorPriorTerms, Problem):
             "records": len(self._records),
             "samples": int(sum(len(r[0]) for r in self._records)),
             "sample_time": self.dataset.sample_time,
+            "pole_pairs": int(self.dataset.pole_pairs),
             "input_hold": self.dataset.input_hold,
             "conditioning": list(self.dataset.conditioning),
             "cost": {"exponent": self.exponent, "weights": dict(zip(WEIGHT_KEYS, self.weights.tolist(), strict=True))},
