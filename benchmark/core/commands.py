@@ -71,8 +71,9 @@ def command(module: str, overrides) -> str:
 
 def rerun_command(overrides, **changes) -> str:
     """``python -m benchmark`` with the run's overrides and ``changes`` (key -> value) in place
-    of any the run gave for those keys (a value None drops the key: its default is used)."""
-    kept = [o for o in overrides if _key(o) not in changes]
+    of any the run gave for those keys and their sub-keys (a value None drops the key: its default is
+    used; ``optimizer`` also drops ``optimizer.plugin.xatol=...``, a setting of the optimiser replaced)."""
+    kept = [o for o in overrides if not any(_key(o) == k or _key(o).startswith(k + ".") for k in changes)]
     return command("benchmark", kept + [f"{k}={_value(v)}" for k, v in changes.items() if v is not None])
 
 

@@ -80,3 +80,15 @@ def test_a_model_that_misses_suggests_the_diagnosis_of_that_folder_and_it_runs(t
     assert diag.returncode == 0, diag.stderr
     doc = json.loads((tmp_path / "diag" / "diagnosis.json").read_text())
     assert doc["status"] != "no_gap", doc["status"]
+
+
+def test_the_default_optimiser_is_suggested_without_the_replaced_optimisers_settings():
+    """A cold reviewer's Nelder-Mead run with its own tolerances was told to rerun with the default
+    optimiser, and the command carried `optimizer.plugin.xatol=0.2`, an unknown key there."""
+    from benchmark.core.commands import rerun_command
+
+    cmd = rerun_command(["optimizer=scipy_de", "optimizer.plugin.popsize=5", "+optimizer.plugin.tol=0.1", "seed=3",
+                         "budget=400", "data.path=bench", "figures=false"], optimizer=None, budget=None)
+    assert cmd == "python -m benchmark seed=3 data.path=bench"
+    polished = rerun_command(["optimizer=deap", "seed=1"], polish=True)
+    assert polished == "python -m benchmark optimizer=deap seed=1 polish=true"
