@@ -143,7 +143,7 @@ def write_figures(rows: list[Row], inst, out: Path) -> dict[str, dict[str, str]]
             ax.fill_between(grid[band], lo[band], hi[band], color=color, alpha=0.18, lw=0)
         fstars = [inst[key].best for key in inst if key[0] == group and math.isfinite(inst[key].best)]
         if len(fstars) == 1:
-            ax.axhline(fstars[0], color="k", ls=":", lw=0.8, label="best cost found (f*)")
+            ax.axhline(fstars[0], color="k", ls=":", lw=0.8, label="best cost any run found (f_best)")
         ax.set_xscale("log")
         ax.set_yscale("log" if positive else "symlog")
         ax.set_xlabel("evaluations (counted by the harness)")

@@ -24,7 +24,7 @@ def _accuracy_table(grp: list[Row], params: list[str], tol: float) -> tuple[list
     head = (
         ["optimizer", "runs", "failed", f"success (all within {100 * tol:g} %)"]
         + params
-        + ["median cost", "median wall time (s)"]
+        + ["median cost", "median optimiser time (s)", "median run time (s)"]
     )
     body = []
     for r in grp:
@@ -35,7 +35,7 @@ def _accuracy_table(grp: list[Row], params: list[str], tol: float) -> tuple[list
             cells.append(
                 f"{_signed_pct(v[f'{p}_median'])} [{_pct(v[f'{p}_iqr'])}]" if not math.isnan(v[f"{p}_median"]) else "–"
             )
-        cells += [_g(v["cost_median"]), _g(v["wall_time_median_s"], 3)]
+        cells += [_g(v["cost_median"]), _g(v["optimizer_time_median_s"], 3), _g(v["wall_time_median_s"], 3)]
         body.append(cells)
     return head, body
 
@@ -87,7 +87,8 @@ def render_markdown(rows: list[Row], inst, opts, figures: dict, command: str, n_
         f"[interquartile range]. Success: every parameter within {100 * tol:g} % (failed runs count as "
         f"unsuccessful). Fixed target: {_target_text(opts)}; ERT = evaluations spent by all runs until they "
         f"reached it or stopped, over the number that reached it. Fixed budget: median best cost after B "
-        f"evaluations over the runs given at least B (a count n/N shows when fewer). See "
+        f"evaluations over the runs given at least B (a count n/N shows when fewer). Times: the optimiser's "
+        f"search alone, and the whole run (set-up, search, polish, standard errors, review). See "
         f"`benchmark/report.py` for the definitions.",
         "",
     ]
@@ -97,7 +98,9 @@ def render_markdown(rows: list[Row], inst, opts, figures: dict, command: str, n_
         params = grp[0].parameters
         keys = sorted(k for k in inst if k[0] == group)
         fstar = ", ".join(f"{_g(inst[k].best, 8)}" + (f" (noise.seed {k[1]})" if len(keys) > 1 else "") for k in keys)
-        out += [f"## {group}", "", f"Best cost found (f*): {fstar}.", ""]
+        out += [f"## {group}", "", f"Best cost any run in this folder found (f_best): {fstar}. It is not the "
+                "problem's optimum: the fixed targets are relative to it and move when runs are added "
+                "(`target_abs=` fixes one).", ""]
         if wins.get(group):
             out += ["Who wins:", ""] + [f"- {line}" for line in wins[group]] + [""]
         out += ["### Parameter errors", ""] + _md_table(*_accuracy_table(grp, params, tol)) + [""]
@@ -105,6 +108,9 @@ def render_markdown(rows: list[Row], inst, opts, figures: dict, command: str, n_
             out += ["fv and fc follow J (a free stop fixes J/fv and fc/J, not J): where the stop record "
                     "fixes them their errors are J's.", ""]
         out += ["### Fixed target and fixed budget", ""] + _md_table(*_budget_table(grp, opts["budgets"])) + [""]
+        if not any(r.values[f"cost_at_{b}_n"] for r in grp for b in opts["budgets"]):
+            out += [f"No run was given any of the fixed budgets {list(opts['budgets'])}: give "
+                    "`budgets=[...]` within the runs' budget for those columns.", ""]
         failed = [r for row in grp for r in row.runs if r.failed]
         if failed:
             out += ["### Failed runs", ""]
@@ -159,7 +165,7 @@ def render_tex(rows: list[Row], opts) -> str:
         out += _tex_table(
             *_accuracy_table(grp, grp[0].parameters, tol),
             caption=f"{group}: median signed relative error [interquartile range] per parameter, "
-            f"success rate (every parameter within {100 * tol:g} %), median cost and wall time.",
+            f"success rate (every parameter within {100 * tol:g} %), median cost, optimiser time and run time.",
             label=f"tab:{slug}-accuracy",
         )
         out += _tex_table(

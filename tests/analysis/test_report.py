@@ -66,6 +66,7 @@ def write_run(
         "budget": 100,
         "polish": {"evaluations": 0} if polish else None,
         "wall_time_s": 2.0 + seed,
+        "wall_time_optimizer_s": 0.5 + seed,
         "history": "history.csv",
         "config": {
             "problem": {"name": problem},
@@ -175,6 +176,7 @@ def test_summary_numbers(runs_dir):
     assert B["a_median"] == pytest.approx(0.0015)  # median of 0.001, 0.002 (not 0.5)
     assert (B["success_n"], B["success_rate"]) == (2, pytest.approx(2 / 3))
     assert B["wall_time_median_s"] == pytest.approx(3.0)  # 2, 3, 4 s
+    assert B["optimizer_time_median_s"] == pytest.approx(1.5)  # the search alone: 0.5, 1.5, 2.5 s
 
     # f* of toyA = 1.0 (a0); target 1 % above: 1.01. alpha: only a0 reaches it, at 100;
     # ERT = (100 + 100 + 100) / 1. beta: b0 at 40, b1 at 90, b2 (failed after 30) never:
