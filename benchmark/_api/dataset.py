@@ -44,6 +44,7 @@ class DataSet:
     Example
     -------
     >>> import numpy as np, pandas as pd
+    >>> from benchmark.api import DataSet
     >>> t = np.arange(3) * 1e-4
     >>> ds = DataSet(meta={"kind": "startup", "pole_pairs": 1, "sample_time": 1e-4},
     ...              tables={"startup": pd.DataFrame({"t": t, "v_alpha": 0 * t, "v_beta": 0 * t,
