@@ -205,6 +205,10 @@ def test_effect_free_data_have_no_gap(out):
     assert doc["status"] == "no_gap" and doc["verdict"] == "none" and doc["effects"] == []
     gb = doc["gap_before"]
     assert gb["noise_band"][0] <= gb["heldout_rms_over_noise"] <= gb["noise_band"][1]
+    # the report does not speak of an excess there is not (a cold user read "100 % of the start-up's
+    # excess" beside "no gap")
+    where = next(line for line in (out / "none" / "diagnosis.md").read_text().splitlines() if line.startswith("Where"))
+    assert where.startswith("Where: nowhere (the held-out gap is within the band") and "excess" not in where
 
 
 def test_two_effects_at_once_are_both_named(out):

@@ -223,8 +223,7 @@ def render_markdown(doc: dict) -> str:
              f"{gb['noise_band'][1]:.3f} (the noise estimate's own uncertainty).",
              f"Share of the excess held-out misfit (above the noise) explained: "
              f"{100 * doc['explained_share']:.0f} %.", "",
-             f"Where: {loc['summary']}." if doc["status"] != "no_gap" else
-             f"Where: nowhere as a whole (the held-out gap is within the band); locally {loc['summary']}.", ""]
+             f"Where: {loc['summary']}." if doc["status"] != "no_gap" else _no_gap_where(loc), ""]
     lines += [line for w in doc.get("warnings", []) for line in (f"**Check:** {w}", "")]
     lines += capped_fit_lines(doc.get("fits"))
     if doc["per_effect"]:
@@ -341,3 +340,14 @@ def not_firm_lines(doc: dict) -> list[str]:
                    f"{100 * doc['rule']['selection_share']:.0f} %: a noise estimate a few per cent off would not "
                    f"have named it, and the data do not settle it.")
     return out
+
+
+def _no_gap_where(loc: dict) -> str:
+    """Where, when there is no gap: the record's largest local rise above the band, which noise makes
+    somewhere in any record, without the share of an excess there is not."""
+    w = loc.get("excess_window")
+    if not w:
+        return "Where: nowhere (the held-out gap is within the band, and no part of the start-up exceeds it)."
+    return (f"Where: nowhere (the held-out gap is within the band); its largest local rise above the band, "
+            f"t = {w['start_s']:.3g}-{w['end_s']:.3g} s, is what noise gives somewhere in a record.")
+
