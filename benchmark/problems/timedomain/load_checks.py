@@ -292,10 +292,13 @@ def check_speed_plausibility(meta_path: Path, startups, stops, p: int,
         basis = f"supply_frequency {supply_frequency:g} Hz and pole_pairs {p} in meta.yaml"
         strict = True
     else:
-        estimates = [synchronous_speed_estimate(r, p, float(np.median(np.diff(r.t))) if len(r.t) > 1 else 1.0)
+        # the supply's own rotation at the record's end (the currents' turn faster in a start's transient),
+        # else the currents'
+        estimates = [abs(electrical_speed(r)) / p
+                     or synchronous_speed_estimate(r, p, float(np.median(np.diff(r.t))) if len(r.t) > 1 else 1.0)
                      for r in startups]
         w_sync = max(estimates) if estimates else 0.0
-        basis = (f"estimated from the rotation of the currents (about {w_sync * p / (2 * np.pi):.3g} Hz) and "
+        basis = (f"estimated from the supply's rotation (about {w_sync * p / (2 * np.pi):.3g} Hz) and "
                  f"pole_pairs {p}")
         strict = False
     if not w_sync > 0:
@@ -314,9 +317,10 @@ def check_speed_plausibility(meta_path: Path, startups, stops, p: int,
         if speed_unit == "rpm":
             rpm_hint = " (meta.yaml declares speed_unit: rpm; the speed above is after conversion)"
         k_times = abs(v) / w_sync
-        if round(k_times) >= 2 and abs(k_times / round(k_times) - 1.0) < 0.15:  # an integer multiple
-            rpm_hint = (f"; at {round(k_times)} times it, is the speed electrical (divide it by pole_pairs {p}) or "
-                        f"pole_pairs too large (then {p / round(k_times):g})?") + rpm_hint
+        k_int = round(k_times)
+        if k_int >= 2 and abs(k_times / k_int - 1.0) < 0.15 and p % k_int == 0:  # pole pairs' multiple
+            electrical = f"is the speed electrical (divide it by pole_pairs {p}) or " if k_int == p else "are "
+            rpm_hint = (f"; at {k_int} times it, {electrical}pole_pairs too many (then {p // k_int})?") + rpm_hint
         if strict:
             raise DataError(source, "impossible for a motor starting on that supply" + "; " + msg + rpm_hint
                             + " (or correct supply_frequency / pole_pairs)", column="speed", row=k + 1)
