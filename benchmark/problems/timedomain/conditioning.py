@@ -254,7 +254,8 @@ def condition_startup(rec: StartupRecord, ts: float, pole_pairs: int, supply_fre
         else:
             after = 1
         v_a, v_b = sampled_volt_seconds(v_a, after), sampled_volt_seconds(v_b, after)
-        in_file = f" of the trimmed record ({(after + first) * ts:.4f} s in the file)" if first else ""
+        in_file = (f" of the trimmed record ({rec.t[min(after + first, n - 1)]:.4f} s after the file's first sample)"
+                   if first else "")
         said.append(f"measured supply voltages from t = {after * ts:.4f} s{in_file} on: the volt-seconds the linear "
                     "interpolation loses between samples of a continuous voltage restored (second difference / 12)")
     return StartupRecord(
