@@ -10,6 +10,7 @@ quoted for a POSIX shell.
 from __future__ import annotations
 
 import shlex
+from pathlib import Path
 
 import yaml
 from omegaconf import DictConfig, OmegaConf
@@ -67,6 +68,22 @@ def command(module: str, overrides) -> str:
     :data:`PRESENTATION_KEYS`)."""
     kept = [o for o in overrides if _key(o).split(".")[0] not in PRESENTATION_KEYS]
     return " ".join(["python", "-m", module, *(shlex.quote(o) for o in kept)])
+
+
+def typed_command(argv) -> str:
+    """The command a run was started with, as a user types it: ``.../benchmark/__main__.py ARGS`` (``sys.argv``
+    under ``python -m``) -> ``python -m benchmark ARGS``, each argument quoted for the shell; a string already
+    so written is returned as it is."""
+    if isinstance(argv, str):
+        if argv.startswith("python"):
+            return argv
+        argv = shlex.split(argv)
+    argv = [str(a) for a in argv]
+    if not argv:
+        return ""
+    head = Path(argv[0])
+    prog = [] if head.name != "__main__.py" or not head.parent.name else ["python", "-m", head.parent.name]
+    return " ".join([*prog, *(shlex.quote(a) for a in argv[1:])] if prog else [shlex.quote(a) for a in argv])
 
 
 def rerun_command(overrides, **changes) -> str:

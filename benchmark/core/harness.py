@@ -13,6 +13,7 @@ import functools
 import json
 import math
 import platform
+import subprocess
 import sys
 import time
 import warnings
@@ -26,7 +27,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from benchmark.core.budget import BudgetedProblem, run_plugin
-from benchmark.core.commands import run_overrides
+from benchmark.core.commands import run_overrides, typed_command
 from benchmark.core.config_checks import resolve_budget, validate_config
 from benchmark.core.errors import ConfigError, ResumeError, ResumeWarning
 from benchmark.core.identify import identify, polish_and_keep_better
@@ -140,13 +141,33 @@ def evaluations_text(record: dict) -> str:
 
 
 def package_versions() -> dict[str, str]:
+    """Python's and the recorded packages' versions; run from a git checkout, also its commit (with
+    ``-dirty`` when files differ from it: a locally edited plugin)."""
     out = {"python": platform.python_version()}
     for name in RECORDED_PACKAGES:
         try:
             out[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             pass
+    commit = source_commit()
+    if commit:
+        out["imbench_git"] = commit
     return out
+
+
+@functools.cache
+def source_commit() -> str | None:
+    """``git describe --always --dirty`` of the checkout this package runs from, or None (an installed
+    wheel, no git)."""
+    root = Path(__file__).resolve().parents[2]
+    if not (root / ".git").exists():
+        return None
+    try:
+        out = subprocess.run(["git", "-C", str(root), "describe", "--always", "--dirty", "--abbrev=12"],
+                             capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None if out.returncode == 0 else None
 
 
 def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[str, float] | None:
@@ -315,7 +336,7 @@ def run(cfg: DictConfig, outdir: Path, overrides: list[str] | None = None) -> Ru
         "fingerprint": fingerprint,
         "config": OmegaConf.to_container(cfg, resolve=True),
         "versions": package_versions(),
-        "command": " ".join(sys.argv),
+        "command": typed_command(sys.argv),
     }
     if result.traceback:
         record["traceback"] = result.traceback

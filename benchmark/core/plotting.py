@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmark.core.commands import typed_command
+
 __all__ = ["Plot", "envelope", "figure_plots", "write_run_figures", "write_report", "REPORT_NAME"]
 
 REPORT_NAME = "report.md"
@@ -203,15 +205,6 @@ def write_run_figures(problem, record: dict, x: np.ndarray | None, outdir) -> di
             "time_s": time.perf_counter() - t0}
 
 
-def _command(argv: str) -> str:
-    """The command as typed: ``.../benchmark/__main__.py ARGS`` -> ``python -m benchmark ARGS``."""
-    head, _, rest = argv.partition(" ")
-    path = Path(head)
-    if path.name == "__main__.py" and path.parent.name:
-        return f"python -m {path.parent.name} {rest}".rstrip()
-    return argv
-
-
 def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str]) -> Path:
     """``report.md``: what was run, the estimate against the truth, warnings, and the figures."""
     from benchmark.core.io import write_text_atomic
@@ -220,7 +213,7 @@ def write_report(outdir: Path, record: dict, plots: list[Plot], errors: list[str
     cost = r.get("cost")
     lines = [f"# {r.get('problem')} / {r.get('optimizer')}, seed {r.get('seed')}", ""]
     if r.get("command"):
-        lines += [f"Command: `{_command(r['command'])}`", ""]
+        lines += [f"Command: `{typed_command(r['command'])}`", ""]
     info = r.get("problem_info") or {}
     if info.get("data"):
         lines += [f"Data: {info['data']}", ""]

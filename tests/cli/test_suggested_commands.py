@@ -92,3 +92,13 @@ def test_the_default_optimiser_is_suggested_without_the_replaced_optimisers_sett
     assert cmd == "python -m benchmark seed=3 data.path=bench"
     polished = rerun_command(["optimizer=deap", "seed=1"], polish=True)
     assert polished == "python -m benchmark optimizer=deap seed=1 polish=true"
+
+
+def test_the_recorded_command_runs_as_typed():
+    """result.json recorded '/path/benchmark/__main__.py optimizer=...', which a reader cannot run."""
+    from benchmark.core.commands import typed_command
+
+    argv = ["/x/benchmark/__main__.py", "optimizer=deap", "data.path=my data", "++bounds.J=[0.001,0.1]"]
+    assert typed_command(argv) == "python -m benchmark optimizer=deap 'data.path=my data' '++bounds.J=[0.001,0.1]'"
+    assert typed_command("/x/benchmark/__main__.py seed=1") == "python -m benchmark seed=1"  # an older record
+    assert typed_command("python -m benchmark seed=1") == "python -m benchmark seed=1"
