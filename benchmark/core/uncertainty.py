@@ -98,9 +98,9 @@ def _prewhiten(series: list[np.ndarray], k: int) -> tuple[list[np.ndarray], np.n
     return [s[1:] - s[:-1] @ A.T for s in series if len(s) > 1], np.linalg.inv(np.eye(k) - A)
 
 
-def _bread(J: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+def _bread(J: np.ndarray, rcond: float, warn: bool = True) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
     """``(J'J)^-1`` of the column-scaled Jacobian (the pseudo-inverse when its rank is short, with a
-    :class:`RuntimeWarning`), the column scales, the rank and the null space's basis."""
+    :class:`RuntimeWarning` unless ``warn`` is False), the column scales, the rank and the null space's basis."""
     k = J.shape[1]
     scale = np.linalg.norm(J, axis=0)
     scale = np.where(scale > 0, scale, 1.0)
@@ -109,7 +109,7 @@ def _bread(J: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray, int, np
     rank = int(keep.sum())
     inv_sv2 = np.where(keep, 1.0 / np.where(keep, sv, 1.0) ** 2, 0.0)
     null = Vt[~keep].T
-    if rank < k:
+    if rank < k and warn:
         involved = np.flatnonzero(np.abs(null).max(axis=1) > 1e-3)
         warnings.warn(f"Jacobian has rank {rank} of {k}: parameters {involved.tolist()} (0-based) are not "
                       "separately identifiable; their covariance is the pseudo-inverse one (standard errors "
@@ -117,16 +117,17 @@ def _bread(J: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray, int, np
     return (Vt.T * inv_sv2) @ Vt, scale, rank, null
 
 
-def stated_noise_covariance(jac, residuals, *, rcond=1e-7) -> tuple[np.ndarray, HACInfo]:
+def stated_noise_covariance(jac, residuals, *, rcond=1e-7, warn=True) -> tuple[np.ndarray, HACInfo]:
     """Covariance of least-squares parameters whose residuals are already divided by their readings' stated
     standard errors (an instrument's accuracy): ``(J'J)^-1``, times the reduced chi^2 ``sum r^2 / (n - k)``
     where it exceeds 1 (the stated errors are then too small for the misfit: Birge's ratio). A few readings
     each with its own error (a motor's test report) are what a sandwich cannot estimate: one reading that
-    alone fixes a parameter has a residual near zero however large its error."""
+    alone fixes a parameter has a residual near zero however large its error. ``warn``: a rank-deficient
+    Jacobian's :class:`RuntimeWarning` (off for a caller that reads the null space itself)."""
     J = np.asarray(jac, dtype=float)
     r = np.asarray(residuals, dtype=float).ravel()
     n, k = J.shape
-    bread, scale, rank, null = _bread(J, rcond)
+    bread, scale, rank, null = _bread(J, rcond, warn)
     chi2 = float(r @ r) / (n - k) if n > k else 1.0
     cov = bread * max(1.0, chi2) / np.outer(scale, scale)
     return cov, HACInfo(0.0, 0, rank, k, (), False, null)

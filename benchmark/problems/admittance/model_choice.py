@@ -96,7 +96,10 @@ def _identifiability(problem, x) -> tuple[dict[str, float], np.ndarray]:
     scale = np.where(np.abs(x) > 0, np.abs(x), 1e-3 * (problem.upper - problem.lower))
     sv, vt = np.linalg.svd(J * scale, full_matrices=False)[1:]
     null = sv <= sv.max() * 1e-9 if sv.size and sv.max() > 0 else np.ones(len(x), bool)
-    cov = stated_noise_covariance(J, r)[0] if getattr(problem, "stated_noise", False) else white_covariance(J, r)
+    if getattr(problem, "stated_noise", False):
+        cov = stated_noise_covariance(J, r, warn=False)[0]  # the null space is read below
+    else:
+        cov = white_covariance(J, r)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     if null.any():
         se[np.abs(vt[null]).max(axis=0) > 1e-3] = np.inf
