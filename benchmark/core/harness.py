@@ -391,6 +391,11 @@ def _json_default(o):
     return str(o)
 
 
+def stopped_short(record: dict) -> bool:
+    """Whether the run's review found that the search stopped short of the fit's minimum."""
+    return bool(((record.get("review") or {}).get("stopped_short") or {}).get("short"))
+
+
 def format_table(record: dict) -> str:
     """The short table printed after a run: parameter, unit, estimate, truth, error, standard error."""
     est, truth, err = record["estimate"] or {}, record["truth"] or {}, record["rel_error"] or {}
@@ -403,8 +408,10 @@ def format_table(record: dict) -> str:
         lines.append(f"{k:<10}{units.get(k) or '-':<11}{v:12.6g}{t}{e}{s}")
     cost = record["cost"]
     lines.append(
-        f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}, "
-        f"cost {cost if cost is None else f'{cost:.6g}'}, {evaluations_text(record)}, "
+        f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}"
+        + (" (the optimiser's own stop; the review finds it stopped short: see the warnings)"
+           if record["status"] == Status.CONVERGED.value and stopped_short(record) else "")
+        + f", cost {cost if cost is None else f'{cost:.6g}'}, {evaluations_text(record)}, "
         f"{record['wall_time_s']:.2f} s"
     )
     if record["status"] in (Status.FAILED.value, Status.TIMEOUT.value):

@@ -102,3 +102,16 @@ def test_the_recorded_command_runs_as_typed():
     assert typed_command(argv) == "python -m benchmark optimizer=deap 'data.path=my data' '++bounds.J=[0.001,0.1]'"
     assert typed_command("/x/benchmark/__main__.py seed=1") == "python -m benchmark seed=1"  # an older record
     assert typed_command("python -m benchmark seed=1") == "python -m benchmark seed=1"
+
+
+def test_a_search_that_stops_on_its_own_short_of_the_minimum_says_so_beside_converged(tmp_path):
+    """A cold reviewer's Nelder-Mead with loose tolerances stopped after 6 evaluations at a cost of
+    1.26e6 and printed 'status converged'. The status stays the optimiser's (it stopped on its own
+    criterion), and the line says what the review found."""
+    cmd = ["python", "-m", "benchmark", "optimizer=least_squares", "optimizer.plugin.ftol=0.9",
+           "optimizer.plugin.xtol=0.9", *FAST, f"hydra.run.dir={tmp_path / 'loose'}"]
+    out = _run(cmd, tmp_path)
+    assert out.returncode == 0, out.stderr
+    rec = json.loads((tmp_path / "loose" / "result.json").read_text())
+    assert rec["status"] == "converged" and rec["review"]["stopped_short"]["short"]
+    assert "status converged (the optimiser's own stop; the review finds it stopped short" in out.stdout
