@@ -246,7 +246,9 @@ def render_markdown(doc: dict) -> str:
             value = f"{v:.5g}" + (f" +- {se[k]:.2g}" if se.get(k) is not None else "")
             alone = f"{first[k]:.5g}" if k in first else "-"
             lines.append(f"| {k} | {PARAMETER_UNITS.get(k, '-')} | {value} | {alone} |")
-        lines.append("")
+        lines += ["", "\"Identified alone\" is the diagnosis's own base identification (two seeds and its own budgets: "
+                  "conf/diagnose.yaml); `python -m benchmark` on the same folder runs the run's optimiser and "
+                  "budget, and may end a few digits apart.", ""]
     for group in doc["indistinguishable"]:
         lines.append(f"Indistinguishable on this experiment (same held-out signature): {', '.join(group)}.")
     lines += pruned_lines(doc)
