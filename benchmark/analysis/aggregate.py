@@ -81,6 +81,7 @@ from benchmark.analysis.targets import (
     summarize,
 )
 from benchmark.core.io import write_text_atomic
+from benchmark.core.tables import _did_you_mean
 
 
 # -- figures --------------------------------------------------------------------------------------
@@ -186,7 +187,8 @@ def parse_args(argv: Sequence[str]) -> dict:
             key, val = a.split("=", 1)
             key = key.lstrip("+")
             if key not in DEFAULTS:
-                raise ReportError(f"{key}: unknown argument; valid: {', '.join(DEFAULTS)}")
+                raise ReportError(f"{key}: unknown argument{_did_you_mean(key, list(DEFAULTS))}; valid: "
+                                  f"{', '.join(DEFAULTS)}")
             opts[key] = val if key in ("dir", "out") else yaml.safe_load(val)
         elif opts["dir"] is None:
             opts["dir"] = a
