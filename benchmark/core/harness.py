@@ -38,7 +38,7 @@ from benchmark.core.problem import OptimizeResult, Problem, Status
 from benchmark.core.progress import ProgressBar, progress_wanted
 from benchmark.core.quality import assess
 from benchmark.core.resume import JOURNAL_NAME, finished_run, journal_header, read_checkpoint, run_fingerprint
-from benchmark.core.review import review
+from benchmark.core.review import found_short, review
 from benchmark.core.tables import table_size_limit
 from benchmark.core.threads import one_blas_thread
 
@@ -167,7 +167,7 @@ def source_commit() -> str | None:
                              capture_output=True, text=True, timeout=10)
     except (OSError, subprocess.SubprocessError):
         return None
-    return out.stdout.strip() or None if out.returncode == 0 else None
+    return (out.stdout.strip() or None) if out.returncode == 0 else None
 
 
 def score(estimate: dict[str, float], truth: dict[str, float] | None) -> dict[str, float] | None:
@@ -391,11 +391,6 @@ def _json_default(o):
     return str(o)
 
 
-def stopped_short(record: dict) -> bool:
-    """Whether the run's review found that the search stopped short of the fit's minimum."""
-    return bool(((record.get("review") or {}).get("stopped_short") or {}).get("short"))
-
-
 def format_table(record: dict) -> str:
     """The short table printed after a run: parameter, unit, estimate, truth, error, standard error."""
     est, truth, err = record["estimate"] or {}, record["truth"] or {}, record["rel_error"] or {}
@@ -410,7 +405,7 @@ def format_table(record: dict) -> str:
     lines.append(
         f"{record['problem']} / {record['optimizer']} seed {record['seed']}: status {record['status']}"
         + (" (the optimiser's own stop; the review finds it stopped short: see the warnings)"
-           if record["status"] == Status.CONVERGED.value and stopped_short(record) else "")
+           if record["status"] == Status.CONVERGED.value and found_short(record) else "")
         + f", cost {cost if cost is None else f'{cost:.6g}'}, {evaluations_text(record)}, "
         f"{record['wall_time_s']:.2f} s"
     )

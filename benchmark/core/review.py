@@ -115,6 +115,12 @@ def calibrated(problem, ident, polish_budget: int) -> tuple[object, dict | None]
     return dataclasses.replace(ident, x=x, cost=cost), {"rounds": rounds, "evaluations": evaluations}
 
 
+def found_short(record: dict) -> bool:
+    """Whether a run's record (``result.json``) says its review found the search stopped short of the
+    fit's minimum (:func:`stopped_short`'s ``short``)."""
+    return bool(((record.get("review") or {}).get("stopped_short") or {}).get("short"))
+
+
 @dataclass
 class Review:
     """What the second look found: the problem and identification to report (replaced when the

@@ -104,7 +104,7 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
             power[ch].append(float(np.mean(d[np.isfinite(d)] ** 2)))
     u_v = max(vn["v_alpha"].rel_uncertainty, vn["v_beta"].rel_uncertainty)
     noise = dict(noise)
-    added, spreads = {}, {}
+    added, uncertainties = {}, {}
     for ch, p in power.items():
         p = np.asarray(p)
         var_p = float(np.mean(p))
@@ -117,7 +117,7 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
         old = noise[ch]
         var = old.std**2 + var_p
         added[ch] = math.sqrt(var_p)
-        spreads[ch] = u_p
+        uncertainties[ch] = u_p
         noise[ch] = NoiseEstimate(math.sqrt(var), (old.std**2 * old.rel_uncertainty + var_p * u_p) / var,
                                   old.n_effective,
                                   f"{old.method}; with the measured voltage's noise through the model "
@@ -125,7 +125,7 @@ def with_propagated_voltage_noise(noise: dict[str, NoiseEstimate], simulate, t, 
     record = {"voltage_std": {ch: float(v.std) for ch, v in vn.items()},
               "voltage_method": vn["v_alpha"].method + ("" if templates else "; white realisations"),
               "propagated_std": added,
-              "propagated_rel_uncertainty": spreads,
+              "propagated_rel_uncertainty": uncertainties,
               "realisations": REALISATIONS}
     return noise, record
 
