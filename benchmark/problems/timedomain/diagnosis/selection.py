@@ -75,6 +75,7 @@ class Selector(Screening, BackwardCheck, Instants):
         self.grids: dict = {}  # (model's effects, fold mask) -> its start grids' best rows (:func:`.grid.on_grid`)
         self.screened_beside: dict = {}  # fit screened beside -> {candidate: its :class:`.screening.Screened`}
         self.refitted: set = set()  # (set, its sources' sets) already refitted: a refit from them again is the same
+        self.full_fits: dict = {}  # set -> (fit cross-started from all data, the fit it came from, x on all data)
         self.base_full: np.ndarray | None = None  # the base fitted on all data (set by the pipeline)
         self.input_noise = None  # what the measured voltage's noise adds to each channel (the pipeline's)
         self.removal_fits: dict = {}  # (removal, set) -> selector of the record with it put back (conditioning_check)
@@ -230,10 +231,16 @@ class Selector(Screening, BackwardCheck, Instants):
         return SetFit(model, self.agreed(model, xs), self.masks) if changed else sf
 
     def with_full_fit(self, sf: SetFit) -> tuple[SetFit, np.ndarray]:
-        """``sf`` cross-started from the fit on all data (also returned: the reported parameters)."""
+        """``sf`` cross-started from the fit on all data (also returned: the reported parameters);
+        the same fit again (or what it returned) is not fitted again."""
+        key = frozenset(sf.names)
+        done = self.full_fits.get(key)
+        if done is not None and any(sf is f for f in done[:2]):
+            return done[0], done[2]
         x = sf.model.fit(0.5 * (sf.xs["A"] + sf.xs["B"]), None, self.settings.max_iterations)
         out = self.cross_start(sf, [x])
-        self.memo[frozenset(out.names)] = out
+        self.memo[key] = out
+        self.full_fits[key] = (out, sf, x)
         return out, x
 
     # ------------------------------------------------------------------ decisions
@@ -288,7 +295,7 @@ class Selector(Screening, BackwardCheck, Instants):
                 rnd["indistinguishable"] = self.indistinguishable(
                     sf, [(r["effect"], trials[r["effect"]]) for r in rows[1:] if r["earns"]], self.settings.band_k)
                 order.append(best["effect"])
-                cur = sf
+                cur, _ = self.with_full_fit(sf)  # the next round starts from the set's best fit
                 continue
             pair = self.pair_step(cur, pool, trials, band, rounds, progress)
             if pair is None:
@@ -296,6 +303,7 @@ class Selector(Screening, BackwardCheck, Instants):
             if pair is REFUSED:  # a member out on entry: the round again from the same set without it
                 continue
             names, cur = pair
+            cur, _ = self.with_full_fit(cur)
             order += names
 
     def round_fits(self, cur: SetFit, pool, band: float, progress=None) -> tuple[dict, dict, list[str]]:
