@@ -352,4 +352,3 @@ def _no_gap_where(loc: dict) -> str:
         return "Where: nowhere (the held-out gap is within the band, and no part of the start-up exceeds it)."
     return (f"Where: nowhere (the held-out gap is within the band); its largest local rise above the band, "
             f"t = {w['start_s']:.3g}-{w['end_s']:.3g} s, is what noise gives somewhere in a record.")
-
