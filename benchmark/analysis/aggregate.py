@@ -81,7 +81,7 @@ from benchmark.analysis.targets import (
     summarize,
 )
 from benchmark.core.io import write_text_atomic
-from benchmark.core.tables import _did_you_mean
+from benchmark.core.spelling import did_you_mean
 
 
 # -- figures --------------------------------------------------------------------------------------
@@ -187,7 +187,7 @@ def parse_args(argv: Sequence[str]) -> dict:
             key, val = a.split("=", 1)
             key = key.lstrip("+")
             if key not in DEFAULTS:
-                raise ReportError(f"{key}: unknown argument{_did_you_mean(key, list(DEFAULTS))}; valid: "
+                raise ReportError(f"{key}: unknown argument{did_you_mean(key, list(DEFAULTS))}; valid: "
                                   f"{', '.join(DEFAULTS)}")
             opts[key] = val if key in ("dir", "out") else yaml.safe_load(val)
         elif opts["dir"] is None:

@@ -9,11 +9,11 @@ an editable install). Every entry point, the API and the effect catalogue read i
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Sequence
 from pathlib import Path
 
 from benchmark.core.errors import ConfigError
+from benchmark.core.spelling import did_you_mean
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -167,7 +167,3 @@ def unknown_key_message(cfg, key: str, only_near_misses: bool = False) -> str | 
     return None
 
 
-def did_you_mean(word: str, known, prefix: str = "") -> str:
-    """`` (did you mean X?)`` for the nearest of ``known``, or an empty string."""
-    close = difflib.get_close_matches(word, list(known), n=1, cutoff=0.6)
-    return f" (did you mean {prefix + '.' if prefix else ''}{close[0]}?)" if close else ""

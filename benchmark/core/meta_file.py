@@ -12,7 +12,8 @@ from pathlib import Path
 import yaml
 
 from benchmark.core.errors import DataError
-from benchmark.core.tables import MAX_YAML_BYTES, _did_you_mean, _one_line, _short_repr, read_text
+from benchmark.core.spelling import found_instead
+from benchmark.core.tables import MAX_YAML_BYTES, _one_line, _short_repr, read_text
 
 
 def read_yaml(path: Path, max_bytes: int = MAX_YAML_BYTES):
@@ -44,7 +45,7 @@ def read_meta(folder: Path, required: dict[str, type | tuple[type, ...]]) -> dic
         raise DataError(path, f"must be a mapping of keys to values, got {type(meta).__name__}")
     for key, kind in required.items():
         if key not in meta:
-            raise DataError(path, f"missing key '{key}'" + _did_you_mean(key, [str(k) for k in meta]))
+            raise DataError(path, f"missing key '{key}'" + found_instead(key, [str(k) for k in meta]))
         meta[key] = check_meta_type(path, key, meta[key], kind)
     return meta
 
@@ -93,7 +94,7 @@ def parse_nameplate(meta_path: Path, value) -> dict:
     out = {}
     for k, v in value.items():
         if k not in NAMEPLATE_KEYS:
-            raise DataError(meta_path, f"key 'nameplate.{k}' unknown{_did_you_mean(str(k), NAMEPLATE_KEYS)}; "
+            raise DataError(meta_path, f"key 'nameplate.{k}' unknown{found_instead(str(k), NAMEPLATE_KEYS)}; "
                                        f"known: {list(NAMEPLATE_KEYS)}")
         x = check_meta_type(meta_path, f"nameplate.{k}", v, float)
         if not x > 0:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import difflib
 import io
 import re
 import warnings
@@ -34,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from benchmark.core.errors import DataError
+from benchmark.core.spelling import found_instead
 
 #: Largest table read, in bytes; a larger file is refused before it is read. The harness
 #: sets it from ``data.max_file_mib`` for the duration of a run (:func:`table_size_limit`).
@@ -404,7 +404,7 @@ def select_columns(path: Path, names: Sequence[str], alternatives: Sequence[Sequ
         best = max(alternatives, key=lambda a: len(set(a) & have))
         missing = [c for c in best if c not in have]
         options = " or ".join("(" + ", ".join(a) + ")" for a in alternatives)
-        hint = _did_you_mean(missing[0], [c for c in names if c not in best])
+        hint = found_instead(missing[0], [c for c in names if c not in best])
         raise DataError(path, f"missing {what}(s) {missing}{hint}; expected {options}; found {list(names)}",
                         column=missing[0])
     keep = list(chosen) + [c for c in optional if c in have and c not in chosen]
@@ -426,18 +426,10 @@ def check_optional_near_misses(path: Path, optional: Sequence[str], keep: Sequen
     for c in optional:
         if c in keep:
             continue
-        hint = _did_you_mean(c, [n for n in names if n not in keep])
+        hint = found_instead(c, [n for n in names if n not in keep])
         if hint:
             raise DataError(path, f"no {what} '{c}'{hint}; rename it '{c}' (or remove it if the record has no {c})",
                             column=c)
-
-
-def _did_you_mean(name: str, candidates: Sequence[str]) -> str:
-    lower = {c.lower(): c for c in candidates}
-    if name.lower() in lower:
-        return f" (found '{lower[name.lower()]}': names are case-sensitive)"
-    close = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.6)
-    return f" (found '{close[0]}': misspelt?)" if close else ""
 
 
 def _short_repr(value, limit: int = 60) -> str:

@@ -286,7 +286,7 @@ def test_bad_arguments_are_one_line_errors(tmp_path):
     for args, msg in (
         ([str(tmp_path)], "no result.json"),
         ([str(tmp_path), "bogus=1"], "bogus: unknown"),
-        ([str(tmp_path), "budget=[100]"], r"budget: unknown argument \(found 'budgets': misspelt\?\)"),
+        ([str(tmp_path), "budget=[100]"], r"budget: unknown argument \(did you mean budgets\?\)"),
         ([str(tmp_path / "nope")], "not a folder"),
         ([str(tmp_path), "budgets=[0]"], "budgets"),
         ([], "no folder given"),

@@ -26,7 +26,8 @@ import numpy as np
 
 from benchmark.core.errors import DataError
 from benchmark.core.meta_file import check_meta_type
-from benchmark.core.tables import _did_you_mean, _short_repr
+from benchmark.core.spelling import found_instead
+from benchmark.core.tables import _short_repr
 from benchmark.problems.timedomain.frames import SQRT3
 
 #: Largest channel skew meta.yaml may state, samples (a multiplexed card's whole sequence).
@@ -44,7 +45,7 @@ def parse_channel_skew(meta_path: Path, value) -> float | tuple[float, float] | 
         out = {}
         for k, v in value.items():
             if k not in SKEWED_CHANNELS:
-                raise DataError(meta_path, f"key 'channel_skew.{k}' unknown{_did_you_mean(str(k), SKEWED_CHANNELS)}; "
+                raise DataError(meta_path, f"key 'channel_skew.{k}' unknown{found_instead(str(k), SKEWED_CHANNELS)}; "
                                            f"a channel_skew mapping names phase channels {list(SKEWED_CHANNELS)}")
             out[str(k)] = check_meta_type(meta_path, f"channel_skew.{k}", v, float)
         values = tuple(out.values())

@@ -26,7 +26,8 @@ from benchmark.core.errors import DataError, DataWarning
 from benchmark.core.io import write_table_atomic, write_yaml_atomic
 from benchmark.core.matfiles import read_mat_table
 from benchmark.core.meta_file import check_meta_type, parse_nameplate, read_meta
-from benchmark.core.tables import _did_you_mean, _short_repr, check_time_column, read_table
+from benchmark.core.spelling import found_instead
+from benchmark.core.tables import _short_repr, check_time_column, read_table
 from benchmark.problems.timedomain.channel_timing import (
     CURRENT_CHANNELS,
     check_mapping_columns,
@@ -207,7 +208,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         raise DataError(meta_path, f"kind is {kind!r}; this problem reads 'startup' data sets")
     unknown = [str(k) for k in meta if k not in META_KEYS]
     if unknown:
-        hints = "".join(_did_you_mean(k, META_KEYS) for k in unknown)
+        hints = "".join(found_instead(k, META_KEYS) for k in unknown)
         warnings.warn(DataWarning.at(meta_path, f"unknown key(s) {unknown} ignored{hints}; known keys: "
                                                 f"{list(META_KEYS)}"), stacklevel=2)
     p = meta["pole_pairs"]
@@ -300,7 +301,7 @@ def _speed_unit(meta_path: Path, value) -> str:
     """``speed_unit`` of meta.yaml: ``rad/s`` or ``rpm`` (any case), else a DataError."""
     unit = value.strip().lower() if isinstance(value, str) else None
     if unit not in SPEED_UNITS:
-        hint = _did_you_mean(str(value), SPEED_UNITS) if isinstance(value, str) else ""
+        hint = found_instead(str(value), SPEED_UNITS) if isinstance(value, str) else ""
         raise DataError(meta_path, f"key 'speed_unit' must be one of {list(SPEED_UNITS)}, got "
                                    f"{_short_repr(value)}{hint}")
     return unit

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from benchmark.core.errors import ConfigError
 from benchmark.core.io import write_text_atomic
-from benchmark.core.tables import _did_you_mean
+from benchmark.core.spelling import did_you_mean
 from benchmark.studies.suite import fstar as fs
 from benchmark.studies.suite.instances import build_instance, data_folder, harness_config, read_instance
 from benchmark.studies.suite.jobs import jobs_for, launch, pending
@@ -51,7 +51,7 @@ def parse(argv: list[str]) -> tuple[dict, list[str]]:
         elif key in DEFAULTS and eq:
             opts[key] = int(val) if key in ("jobs", "chunk", "sample") else val
         else:
-            raise ConfigError(f"{a}: unknown argument{_did_you_mean(key.lstrip('+'), list(DEFAULTS))}; "
+            raise ConfigError(f"{a}: unknown argument{did_you_mean(key.lstrip('+'), list(DEFAULTS))}; "
                               f"valid: {', '.join(DEFAULTS)} and hydra.*=... (see --help)")
     if opts["stage"] not in STAGES:
         raise ConfigError(f"stage: one of {list(STAGES)}, got {opts['stage']!r}")
