@@ -196,13 +196,6 @@ class Effect:
     #: where the start's size changes least. None: the grid is judged at the start's size.
     grid_size: int | None = None
 
-    def dormant_extras(self, extras: np.ndarray, ctx: EffectContext) -> dict[int, float]:
-        """Extras that do nothing at ``extras`` (one row) and that a local fit would cross
-        blind, as ``{index among the extras: value}``: a fit started there holds each at its
-        value (a part of the form the start leaves out, like a switch-off at never). None by
-        default."""
-        return {}
-
     def prior_residuals(self, extras: np.ndarray, ctx: EffectContext) -> np.ndarray:
         """Weak prior residuals (n, m) of extra-parameter rows (n, k) toward the effect's absence,
         added to every fit's residuals: ``(value - absent value) / width`` with the width the

@@ -172,19 +172,6 @@ class LoadTorque(Effect):
 
     grid_size = 2  # the switched torque, judged at its best at each instant of the grid
 
-    def dormant_extras(self, extras, ctx):
-        """The switch-off where a start has none (at or before the switch-on, or at the record's
-        end): held at the record's end, never. A switch-off is placed by its own start (where the
-        current envelope falls most, :meth:`extra_starts`), as the switch-on is by its grid. Left
-        free from never, the local fits crossed it blind: finite differences see nothing while it
-        lies before the switch-on and a jump where it crosses it, and on held-out plant seed 476
-        set 5 (a load and a tachometer's gain) 20 of 94 fits crawled to the 200-evaluation cap,
-        on 7 of the 10 that could be named with this instant going from never to the record's
-        last half per cent; held there, none reached the cap (256 against 640 CPU s) and the
-        verdict stayed."""
-        x = np.ravel(extras)
-        return {6: 1.0} if x[6] <= x[3] or x[6] >= 1.0 else {}
-
     def prior_residuals(self, extras, ctx):
         """The three torques (constant, quadratic, switched) toward no load, each over the
         largest realistic load (``realistic[1]``, of the torque scale)."""

@@ -110,37 +110,3 @@ def test_the_augmentation_finds_a_switched_dc_machine_from_its_starts():
     assert x[3] == pytest.approx(FORM["step_fraction"], abs=0.002) and x[6] == pytest.approx(FORM["off_fraction"],
                                                                                              abs=0.002)
     assert x[5] == pytest.approx(FORM["tau"], rel=0.05)
-
-
-def test_a_fit_without_a_switch_off_keeps_none_and_one_from_the_envelopes_fall_places_it():
-    """The switch-off is placed as the switch-on is, by a start (where the current envelope falls
-    most), not crossed blind by a local fit: from a start without one (never) a joint fit holds it
-    at never; from the envelope's fall it finds the instant, and fits the record better."""
-    from benchmark.problems.timedomain.data import StartupDataset, StartupRecord
-    from benchmark.problems.timedomain.diagnosis.fit import DiagnosisData, JointModel
-    from benchmark.problems.timedomain.diagnosis.grid import on_grid
-    from benchmark.problems.timedomain.diagnosis.pipeline import base_context
-
-    base, va, vb, ctx = _record(40)
-    meas = simulate_extended_batch(np.ascontiguousarray(LOAD.plant(base, 0.4, ctx, FORM)[None]), va, vb, False,
-                                   1 / 12000, 1)[0]
-    meas = meas + np.random.default_rng(5).normal(0.0, 1.0, meas.shape) * np.array([[0.05], [0.05], [0.25]])
-    t = np.arange(meas.shape[1]) / 12000
-    rec = StartupRecord(t=t, v_alpha=va, v_beta=vb, i_alpha=meas[0], i_beta=meas[1], speed=meas[2])
-    data = DiagnosisData.from_dataset(StartupDataset(pole_pairs=1, sample_time=1 / 12000, startups=[rec],
-                                                     input_hold="zoh"))
-    truth = {k: getattr(PAPER_MOTOR, k) for k in ("Rs", "Ls", "Le", "Rr", "J", "fv", "fc")}
-    ctx = base_context(data, truth, 300.0)
-    assert ctx.load_release is not None
-    model = JointModel(data, 2, [LOAD], ctx, truth, 1.0)
-    k_off = len(model.base_names) + LOAD.extra_names.index("load_step_off")
-    generator = [s for s in LOAD.extra_starts(ctx) if s[4] == 1.0 and s[5] == LOAD.DC_RISE_START]
-    never, release = generator[0], generator[-1]
-    assert never[6] == 1.0 and 0.45 < release[6] < 1.0  # the DC machine's starts at the envelope's rise
-    fits = {}
-    for name, s in (("never", never), ("release", release)):
-        x0 = np.clip(np.concatenate([[truth[n] for n in model.base_names], s]), model.lower, model.upper)
-        fits[name] = model.fit(on_grid(model, x0, None, [0], ctx), None, 40)
-    assert fits["never"][k_off] == 1.0  # held: no switch-off where the start has none
-    assert fits["release"][k_off] == pytest.approx(FORM["off_fraction"], abs=0.002)
-    assert model.ssr(fits["release"]) < 0.5 * model.ssr(fits["never"])

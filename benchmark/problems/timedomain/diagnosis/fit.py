@@ -245,13 +245,9 @@ class JointModel:
         """Local least squares from ``x0`` of :meth:`objective`: the residuals in ``mask`` (all when
         None) and the effects' priors. ``held`` maps parameter indices to values held fixed; a
         parameter whose bounds coincide is held at them too. Held parameters take no part in the
-        fit (no Jacobian column, no simulation), as are the extras the effects leave dormant at
-        ``x0`` (:meth:`Effect.dormant_extras <benchmark.core.effects.Effect.dormant_extras>`)."""
+        fit (no Jacobian column, no simulation)."""
         lo, hi = self.lower.copy(), self.upper.copy()
-        x0 = np.asarray(x0, float)
-        dormant = {s.start + k: v for eff, s in zip(self.effects, self.slices, strict=True)
-                   for k, v in eff.dormant_extras(x0[s], self.ctx).items() if hi[s.start + k] > lo[s.start + k]}
-        for k, value in {**dormant, **(held or {})}.items():
+        for k, value in (held or {}).items():
             lo[k] = hi[k] = value
         free = np.flatnonzero(hi > lo)
         x_held = np.clip(np.asarray(x0, float), lo, hi)
