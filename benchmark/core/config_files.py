@@ -165,5 +165,3 @@ def unknown_key_message(cfg, key: str, only_near_misses: bool = False) -> str | 
         where = f"the keys under {prefix}" if prefix else f"the keys of {'this command'}"
         return f"{key}: unknown key{hint}; {where} are {sorted(known)}"
     return None
-
-
