@@ -4,7 +4,6 @@ problem's own ``check_config`` and the optimiser plugin's options."""
 
 from __future__ import annotations
 
-import difflib
 import importlib
 import inspect
 import math
@@ -14,6 +13,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from benchmark.core.config_files import CONFIG_DIR
 from benchmark.core.errors import ConfigError
+from benchmark.core.spelling import did_you_mean
 
 
 def resolve_budget(cfg: DictConfig) -> int:
@@ -103,9 +103,7 @@ def check_top_level_keys(cfg: DictConfig) -> None:
     known = known_top_level_keys()
     for key in cfg:
         if key not in known and key != "hydra":
-            close = difflib.get_close_matches(str(key), known, n=1, cutoff=0.6)
-            hint = f" (did you mean {close[0]}?)" if close else ""
-            raise ConfigError(f"{key}: unknown key{hint}; the keys of a run are {known}")
+            raise ConfigError(f"{key}: unknown key{did_you_mean(str(key), known)}; the keys of a run are {known}")
 
 
 def _problem_check(cfg):

@@ -26,3 +26,12 @@ def test_a_name_in_a_file_says_what_was_found_case_first():
 def test_the_suites_arguments_read_as_the_main_commands():
     with pytest.raises(ConfigError, match=r"^suit=small: unknown argument \(did you mean suite\?\); valid: suite"):
         parse(["suit=small"])
+
+
+def test_a_run_configs_unknown_top_level_key_gets_the_nearest_key():
+    from omegaconf import OmegaConf
+
+    from benchmark.core.config_checks import check_top_level_keys
+
+    with pytest.raises(ConfigError, match=r"^seeed: unknown key \(did you mean seed\?\); the keys of a run are \["):
+        check_top_level_keys(OmegaConf.create({"seed": 0, "seeed": 1}))
