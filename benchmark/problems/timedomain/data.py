@@ -34,6 +34,14 @@ from benchmark.problems.timedomain.channel_timing import (
     parse_channel_skew,
     realign,
 )
+from benchmark.problems.timedomain.decimation import (
+    check_factor,
+    decimated_record,
+    decimation_note,
+    skew_decimated,
+    suggested_factor,
+    target_rate,
+)
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
 from benchmark.problems.timedomain.load_checks import check_records, check_speed_plausibility
 from benchmark.problems.timedomain.rotation import turn_forwards
@@ -49,7 +57,7 @@ PLAUSIBLE_SPEED_LIMIT = 1600.0
 #: Keys meta.yaml may hold for a time-domain data set; others are reported and ignored.
 META_KEYS = ("kind", "pole_pairs", "sample_time", "input_hold", "dc_link_voltage", "supply_frequency",
              "inertia", "speed_unit", "description", "stator_dc_resistance", "winding_temperature", "nameplate",
-             "conditioning", "chord_voltage", "channel_skew", "speed_filter")
+             "conditioning", "chord_voltage", "channel_skew", "speed_filter", "decimate")
 #: Optional start-up columns: ``speed`` (a record without a speed sensor has none) and ``torque``
 #: (N m, a measured shaft torque).
 OPTIONAL_COLUMNS = ("speed", "torque")
@@ -260,6 +268,22 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"),
                   optional.get("stator_dc_resistance"))
     startups, stops, turned = turn_forwards(startups, stops, skew, meta_path)
+    notes = [turned] if turned else []
+    k = check_factor(meta_path, meta.get("decimate", 1), min(len(r.t) for r in startups))
+    if k > 1:
+        startups, ts, chord = [decimated_record(r, k, hold == "zoh") for r in startups], ts * k, False
+        if skew is not None:
+            optional["channel_skew"] = skew_decimated(skew, k)
+        notes.append(decimation_note(k, ts, optional.get("supply_frequency")))
+    elif hold == "linear" and suggested_factor(ts, optional.get("supply_frequency")) > 1:
+        k_s = suggested_factor(ts, optional.get("supply_frequency"))
+        rate, needed = 1e-3 / ts, 1e-3 * target_rate(optional.get("supply_frequency"))
+        warnings.warn(DataWarning.at(meta_path, f"the start-up is sampled at {rate:.4g} kHz, where the model needs "
+                                                f"{needed:.4g} kHz: decimate: {k_s} in meta.yaml reads one sample "
+                                                f"in {k_s} ({rate / k_s:.4g} kHz, the outputs as means over {k_s}), "
+                                                f"about {k_s} times faster to "
+                                                "fit, with the same information on the motor's dynamics "
+                                                "(docs/data_format.md)"), stacklevel=2)
     ds = StartupDataset(
         pole_pairs=p,
         sample_time=ts,
@@ -268,7 +292,7 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         input_hold=hold,
         chord_voltage=chord,
         folder=str(folder),
-        conditioning=[turned] if turned else [],
+        conditioning=notes,
         **optional,
     )
     if conditioning_on:
