@@ -61,7 +61,9 @@ def main(argv: list[str]) -> int:
     shutil.copytree(full, read)
     meta = yaml.safe_load((read / "meta.yaml").read_text())
     (read / "meta.yaml").write_text(yaml.safe_dump({**meta, "decimate": k}))
-    timed("benchmark", [f"data.path={read}", f"hydra.run.dir={out / 'warm-up'}"])
+    timed("benchmark", [f"data.path={read}", f"hydra.run.dir={out / 'warm-up'}"])  # compiles the kernels
+    if opts["diagnose"] == "true":
+        timed("benchmark.diagnose", [f"data.path={read}", f"hydra.run.dir={out / 'warm-up-diagnosis'}"])
     rows, docs = [], {}
     for label, folder in (("full", full), ("read", read)):
         wall, cpu = timed("benchmark", [f"data.path={folder}", f"hydra.run.dir={out / ('id-' + label)}"])
