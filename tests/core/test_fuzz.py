@@ -222,6 +222,7 @@ META_KEYS = [
     "dc_link_voltage",
     "supply_frequency",
     "inertia",
+    "decimate",
 ]
 
 

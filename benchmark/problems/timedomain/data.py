@@ -274,7 +274,10 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
         startups, ts, chord = [decimated_record(r, k, hold == "zoh") for r in startups], ts * k, False
         if skew is not None:
             optional["channel_skew"] = skew_decimated(skew, k)
-        notes.append(decimation_note(k, ts, optional.get("supply_frequency")))
+        note, below = decimation_note(k, ts, optional.get("supply_frequency"), hold == "zoh")
+        notes.append(note)
+        if below:
+            warnings.warn(DataWarning.at(meta_path, note), stacklevel=2)
     elif hold == "linear" and suggested_factor(ts, optional.get("supply_frequency")) > 1:
         k_s = suggested_factor(ts, optional.get("supply_frequency"))
         rate, needed = 1e-3 / ts, 1e-3 * target_rate(optional.get("supply_frequency"))

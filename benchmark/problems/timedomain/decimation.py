@@ -105,6 +105,8 @@ def skew_decimated(skew, k: int):
 def check_factor(meta_path: Path, value, n_samples: int) -> int:
     """``decimate`` of meta.yaml: a whole number of samples, 1 (none) or more, leaving at
     least two samples per record (``n_samples``: the shortest start-up record's)."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)  # 4.0
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise DataError(meta_path, f"key 'decimate' must be a whole number of samples (1: none), "
                                    f"got {value!r}")
@@ -116,12 +118,15 @@ def check_factor(meta_path: Path, value, n_samples: int) -> int:
     return k
 
 
-def decimation_note(k: int, sample_time: float, supply_frequency: float | None) -> str:
-    """The plain-English line the report gives for a decimated data set (``sample_time`` after it, s)."""
+def decimation_note(k: int, sample_time: float, supply_frequency: float | None, held: bool) -> tuple[str, bool]:
+    """The plain-English line the report gives for a data set read one sample in ``k`` (``sample_time``
+    after it, s; ``held``: a held voltage), and whether that is below the rate the model is validated at."""
     rate = 1.0 / sample_time
     note = (f"start-up records read one sample in {k} ({rate * k / 1e3:.4g} kHz -> {rate / 1e3:.4g} kHz, "
-            f"meta.yaml decimate), the measured outputs as means over {k} samples")
-    if rate < target_rate(supply_frequency) * (1 - 1e-9):
+            f"meta.yaml decimate), " + ("the held voltage as its mean over each interval" if held else
+                                        f"the measured outputs as means over {k} samples"))
+    below = rate < target_rate(supply_frequency) * (1 - 1e-9)
+    if below:
         note += (f"; below the {target_rate(supply_frequency) / 1e3:.4g} kHz the model is validated at for this "
-                 "supply: the model's own stepping error may show in the fit")
-    return note
+                 "supply: its own stepping error may show in the fit")
+    return note, below

@@ -82,6 +82,13 @@ def test_a_bad_factor_names_the_key(dol_24k, bad, words):
     assert "meta.yaml" in str(err.value) and "decimate" in str(err.value) and words in str(err.value)
 
 
+def test_a_whole_number_written_as_a_float_is_read_and_a_rate_too_low_is_told(dol_24k):
+    assert with_meta_key(dol_24k, "decimate", 2.0).sample_time == pytest.approx(2 / 24e3)
+    with pytest.warns(DataWarning, match="6 kHz, meta.yaml decimate.*below the 10 kHz"):
+        ds = with_meta_key(dol_24k, "decimate", 4)
+    assert any("below the 10 kHz" in line for line in ds.conditioning)
+
+
 @pytest.mark.parametrize("waveform, se_ratio", [("sinusoidal", (0.8, 1.25)), ("six_step", (1.05, 1.8))])
 def test_a_start_read_at_half_its_rate_is_identified_as_from_all_its_samples(made, tmp_path, waveform, se_ratio):
     """Read at 12 kHz, a 24 kHz start fits to its noise (a reading whose model is not the data's,
