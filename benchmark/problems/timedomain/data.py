@@ -39,6 +39,7 @@ from benchmark.problems.timedomain.decimation import (
     decimated_record,
     decimation_note,
     skew_decimated,
+    stop_read,
     suggested_factor,
     target_rate,
 )
@@ -263,12 +264,18 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     startups = [_read_startup(f, ts, max_bytes, speed_unit=unit, skew=skew) for f in startup_files]
     for rec in startups:
         check_mapping_columns(meta_path, skew, rec.columns)
-    stops = [_read_stop(f, max_bytes, speed_unit=unit) for f in _record_files(folder, "stop")]
+    stops, stop_notes = [], []
+    for f in _record_files(folder, "stop"):
+        stop, k_stop = stop_read(*_read_stop(f, max_bytes, speed_unit=unit))
+        stops.append(stop)
+        if k_stop > 1:
+            stop_notes.append(f"{f.name} read at {1e-3 / (stop.t[1] - stop.t[0]):.4g} kHz, its speed as means over "
+                              f"{k_stop} samples (a coast's dynamics take seconds)")
     check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
     check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"),
                   optional.get("stator_dc_resistance"))
     startups, stops, turned = turn_forwards(startups, stops, skew, meta_path)
-    notes = [turned] if turned else []
+    notes = ([turned] if turned else []) + stop_notes
     k = check_factor(meta_path, meta.get("decimate", 1), min(len(r.t) for r in startups))
     if k > 1:
         startups, ts, chord = [decimated_record(r, k, hold == "zoh") for r in startups], ts * k, False
@@ -389,12 +396,13 @@ def _read_startup(path: Path, sample_time: float, max_bytes: int | None = None, 
                          source=str(path), torque=torque, columns=columns)
 
 
-def _read_stop(path: Path, max_bytes: int | None = None, *, speed_unit: str = "rad/s") -> StopRecord:
+def _read_stop(path: Path, max_bytes: int | None = None, *, speed_unit: str = "rad/s") -> tuple[StopRecord, float]:
+    """The stop record of ``path`` and its time step (s)."""
     df, _ = _read_records_table(path, [("t", "speed")], max_bytes)
     t = df["t"].to_numpy()
-    check_time_column(path, t)
+    step = check_time_column(path, t)
     speed = _speed_in_rad_per_s(path, df["speed"].to_numpy(), speed_unit)
-    return StopRecord(t=t - t[0], speed=speed, source=str(path))
+    return StopRecord(t=t - t[0], speed=speed, source=str(path)), step
 
 
 def _speed_in_rad_per_s(path: Path, speed: np.ndarray, unit: str) -> np.ndarray:

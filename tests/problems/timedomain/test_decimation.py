@@ -107,3 +107,20 @@ def test_a_start_read_at_half_its_rate_is_identified_as_from_all_its_samples(mad
         se_full, se_read = full["standard_error"][name], read["standard_error"][name]
         assert abs(read["estimate"][name] - full["estimate"][name]) <= 3 * np.hypot(se_full, se_read), name
         assert se_ratio[0] <= se_read / se_full <= se_ratio[1], (name, se_read / se_full)
+
+
+def test_a_stop_sampled_finer_than_a_millisecond_is_read_at_one(tmp_path):
+    """Its speed as means over the twelve samples about each kept one (a 12 kHz stop), the report told;
+    a stop at 1 ms is read as it is (the loader test above)."""
+    import pandas as pd
+
+    folder = _synthetic(tmp_path / "fine_stop", "motor.test.cycles=5", "motor.test.stop_duration=2",
+                        "motor.test.stop_sample_time=8.333333333333333e-05")
+    raw = pd.read_csv(folder / "stop.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = load_startup_dataset(folder)
+    stop = ds.stops[0]
+    assert np.allclose(np.diff(stop.t), 1e-3) and len(stop.t) == -(-len(raw) // 12)
+    assert np.allclose(stop.speed, interval_means(raw["speed"].to_numpy(), 12))
+    assert any("stop.csv read at 1 kHz, its speed as means over 12 samples" in line for line in ds.conditioning)
