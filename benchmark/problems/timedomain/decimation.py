@@ -8,11 +8,10 @@ every fit, and the identification and the diagnosis take four to ten times as lo
 the motor's dynamics carry above a few kilohertz. ``decimate: k`` keeps every ``k``-th sample
 time (the first one included, so the supply's switch-on stays where it was):
 
-* the voltage, the model's input, is a sample there where it is sampled (``linear``: the
-  sample itself, a point of the continuous voltage whose volt-seconds the conditioning restores
-  as for any sampled voltage, so ``chord_voltage`` is dropped) and the mean over the new
-  sample interval where it is held (``zoh``: the interval's volt-seconds exactly, a switching
-  step inside it included);
+* the voltage, the model's input: a sampled one (``linear``) keeps its own samples, points of
+  a continuous voltage whose volt-seconds the conditioning restores as for any sampled voltage
+  (``chord_voltage`` is dropped); a held one (``zoh``) becomes its mean over each new interval
+  (the interval's volt-seconds exactly, a switching step inside it included);
 * the measured outputs (currents, speed, a torque) of a sampled supply are the mean over the
   new sample interval centred on the kept time (``k`` samples; for an even ``k``, ``k + 1``
   with the two ends at half weight; the record's first and last values repeated beyond its
@@ -24,8 +23,8 @@ time (the first one included, so the supply's switch-on stays where it was):
   model's point value (six-step at 48 kHz read at 12 kHz: 1.27 times the noise): there the
   outputs are the samples themselves, and their standard errors those of a record sampled at
   the new rate;
-* a stated ``channel_skew`` (samples) is divided by ``k``; a stated ``speed_filter`` (s) stays,
-  the mean adding half a new sample to it.
+* a stated ``channel_skew`` (samples) is divided by ``k``; a stated ``speed_filter`` (s) stays
+  (the centred mean adds no lag, only a smoothing over one new sample).
 
 Not for an inverter's pulse-width-modulated voltage sampled to show its pulses: held as interval
 means, the pulses' current ripple is not in the model. The stop record is read at
