@@ -34,15 +34,7 @@ from benchmark.problems.timedomain.channel_timing import (
     parse_channel_skew,
     realign,
 )
-from benchmark.problems.timedomain.decimation import (
-    check_factor,
-    decimated_record,
-    decimation_note,
-    skew_decimated,
-    stop_read,
-    suggested_factor,
-    target_rate,
-)
+from benchmark.problems.timedomain.decimation import skew_decimated, startups_read, stop_read
 from benchmark.problems.timedomain.frames import clarke, inverse_clarke, line_to_line_clarke
 from benchmark.problems.timedomain.load_checks import check_records, check_speed_plausibility
 from benchmark.problems.timedomain.rotation import turn_forwards
@@ -264,36 +256,22 @@ def load_startup_dataset(folder, *, max_bytes: int | None = None) -> StartupData
     startups = [_read_startup(f, ts, max_bytes, speed_unit=unit, skew=skew) for f in startup_files]
     for rec in startups:
         check_mapping_columns(meta_path, skew, rec.columns)
-    stops, stop_notes = [], []
+    stops, notes = [], []
     for f in _record_files(folder, "stop"):
-        stop, k_stop = stop_read(*_read_stop(f, max_bytes, speed_unit=unit))
+        stop, note = stop_read(*_read_stop(f, max_bytes, speed_unit=unit))
         stops.append(stop)
-        if k_stop > 1:
-            stop_notes.append(f"{f.name} read at {1e-3 / (stop.t[1] - stop.t[0]):.4g} kHz, its speed as means over "
-                              f"{k_stop} samples (a coast's dynamics take seconds)")
+        notes += [note] if note else []
     check_speed_plausibility(meta_path, startups, stops, p, optional.get("supply_frequency"), speed_unit=unit)
     check_records(startups, optional.get("nameplate"), p, hold, meta_path, optional.get("supply_frequency"),
                   optional.get("stator_dc_resistance"))
     startups, stops, turned = turn_forwards(startups, stops, skew, meta_path)
-    notes = ([turned] if turned else []) + stop_notes
-    k = check_factor(meta_path, meta.get("decimate", 1), min(len(r.t) for r in startups))
+    notes = ([turned] if turned else []) + notes
+    startups, k, lines = startups_read(meta_path, meta.get("decimate", 1), startups, ts, hold,
+                                       optional.get("supply_frequency"))
     if k > 1:
-        startups, ts, chord = [decimated_record(r, k, hold == "zoh") for r in startups], ts * k, False
+        ts, chord, notes = ts * k, False, notes + lines
         if skew is not None:
             optional["channel_skew"] = skew_decimated(skew, k)
-        note, below = decimation_note(k, ts, optional.get("supply_frequency"), hold == "zoh")
-        notes.append(note)
-        if below:
-            warnings.warn(DataWarning.at(meta_path, note), stacklevel=2)
-    elif hold == "linear" and suggested_factor(ts, optional.get("supply_frequency")) > 1:
-        k_s = suggested_factor(ts, optional.get("supply_frequency"))
-        rate, needed = 1e-3 / ts, 1e-3 * target_rate(optional.get("supply_frequency"))
-        warnings.warn(DataWarning.at(meta_path, f"the start-up is sampled at {rate:.4g} kHz, where the model needs "
-                                                f"{needed:.4g} kHz: decimate: {k_s} in meta.yaml reads one sample "
-                                                f"in {k_s} ({rate / k_s:.4g} kHz, the outputs as means over {k_s}), "
-                                                f"about {k_s} times faster to "
-                                                "fit, with the same information on the motor's dynamics "
-                                                "(docs/data_format.md)"), stacklevel=2)
     ds = StartupDataset(
         pole_pairs=p,
         sample_time=ts,

@@ -36,12 +36,13 @@ the loader suggests it for a sampled (``linear``) supply.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
-from benchmark.core.errors import DataError
+from benchmark.core.errors import DataError, DataWarning
 
 #: The stop record's sample time read (s): a coast's dynamics take seconds (the spec's and the generator's
 #: 1 ms); more samples only weigh the stop more in every score pooled over the records' residuals.
@@ -97,14 +98,41 @@ def decimated_record(rec, k: int, held: bool):
 def stop_read(stop, step: float):
     """A :class:`~benchmark.problems.timedomain.data.StopRecord` sampled every ``step`` s read at
     :data:`STOP_SAMPLE_TIME` or faster (its speed as means over ``k`` samples centred on every
-    ``k``-th one, :func:`interval_means`) and ``k`` (1: read as recorded). A stop sampled at
-    12 kHz read as recorded outweighs a 1 s start-up twelve times over: the diagnosis of a direct
-    start with a double cage and a 10 s stop saw a gap of 2.44 where the same stop at 1 kHz gave
-    4.25, and took 2.3 times the CPU time."""
+    ``k``-th one, :func:`interval_means`), and the report's line on it (None: read as recorded).
+    A stop sampled at 12 kHz read as recorded outweighs a 1 s start-up twelve times over: the
+    diagnosis of a direct start with a double cage and a 10 s stop saw a gap of 2.44 where the same
+    stop at 1 kHz gave 4.25, and took 2.3 times the CPU time."""
     k = max(1, int(np.floor(STOP_SAMPLE_TIME / step * (1 + 1e-9))))
     if k == 1:
-        return stop, 1
-    return dataclasses.replace(stop, t=np.asarray(stop.t, float)[::k], speed=interval_means(stop.speed, k)), k
+        return stop, None
+    read = dataclasses.replace(stop, t=np.asarray(stop.t, float)[::k], speed=interval_means(stop.speed, k))
+    return read, (f"{Path(stop.source).name} read at {1e-3 / (k * step):.4g} kHz, its speed as means over {k} "
+                  "samples (a coast's dynamics take seconds)")
+
+
+def startups_read(meta_path: Path, value, startups: list, sample_time: float, hold: str,
+                  supply_frequency: float | None) -> tuple[list, int, list[str]]:
+    """The start-up records read with ``decimate: value`` of ``meta_path`` (checked,
+    :func:`check_factor`): the records, the factor ``k`` and the report's lines. A rate below
+    what the model is validated at is a warning too; a sampled (``linear``) record that could be
+    read at a longer step gets a warning naming the factor."""
+    k = check_factor(meta_path, value, min(len(r.t) for r in startups))
+    held = hold == "zoh"
+    if k > 1:
+        note, below = decimation_note(k, sample_time * k, supply_frequency, held)
+        if below:
+            warnings.warn(DataWarning.at(meta_path, note), stacklevel=3)
+        return [decimated_record(r, k, held) for r in startups], k, [note]
+    k_s = suggested_factor(sample_time, supply_frequency)
+    if not held and k_s > 1:
+        rate = 1e-3 / sample_time
+        warnings.warn(DataWarning.at(meta_path, f"the start-up is sampled at {rate:.4g} kHz, where the model needs "
+                                                f"{1e-3 * target_rate(supply_frequency):.4g} kHz: decimate: {k_s} "
+                                                f"in meta.yaml reads one sample in {k_s} ({rate / k_s:.4g} kHz, the "
+                                                f"outputs as means over {k_s}), about {k_s} times faster to fit, "
+                                                "with the same information on the motor's dynamics "
+                                                "(docs/data_format.md)"), stacklevel=3)
+    return startups, 1, []
 
 
 def skew_decimated(skew, k: int):
