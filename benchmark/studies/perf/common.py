@@ -6,6 +6,9 @@ from __future__ import annotations
 import math
 import os
 import platform
+import resource
+import subprocess
+import sys
 import time
 from importlib import metadata
 from pathlib import Path
@@ -26,6 +29,19 @@ def compose(overrides):
 
     with initialize_config_dir(config_dir=CONF, version_base="1.3"):
         return hydra_compose("config", overrides=list(overrides))
+
+
+def run_timed(code: Path, module: str, args: list[str]) -> tuple[float, float, subprocess.CompletedProcess]:
+    """(wall s, CPU s of the process and its threads, the finished process) of ``python -m module
+    args`` in a fresh interpreter whose ``PYTHONPATH`` is the checkout ``code`` (its output captured)."""
+    env = dict(os.environ, PYTHONPATH=str(code), MPLBACKEND="Agg")
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", module, *args], cwd=str(code), env=env, capture_output=True,
+                          text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), proc
 
 
 def best_times(jobs: dict, rounds: int, cpu: dict | None = None) -> dict:

@@ -15,30 +15,23 @@ verdicts. A ratio compares two runs made on the same machine one after the other
 from __future__ import annotations
 
 import json
-import os
-import resource
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import yaml
 
-from benchmark.studies.perf.common import ROOT, md_table
+from benchmark.studies.perf.common import ROOT, md_table, run_timed
 
 NAMES = ("Rs", "Ls", "Le", "Rr", "J")
 
 
 def timed(module: str, overrides: list[str]) -> tuple[float, float]:
-    """(wall s, CPU s of the process and its threads) of ``python -m module overrides``."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", module, *overrides, "figures=false"], cwd=str(ROOT), env=env, check=True,
-                   capture_output=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return time.perf_counter() - t0, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    """(wall s, CPU s) of ``python -m module overrides`` from this checkout, figures off."""
+    wall, cpu, proc = run_timed(ROOT, module, [*overrides, "figures=false"])
+    proc.check_returncode()
+    return wall, cpu
 
 
 def main(argv: list[str]) -> int:

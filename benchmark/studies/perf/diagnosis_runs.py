@@ -17,14 +17,11 @@ from __future__ import annotations
 
 import json
 import os
-import resource
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from benchmark.studies.perf.common import ROOT
+from benchmark.studies.perf.common import ROOT, run_timed
 
 #: The warm-up: a short synthetic start-up diagnosed in memory (compiles every kernel the diagnosis uses).
 WARM_UP = ["motor.test.cycles=6", "motor.test.stop_duration=2.0", "budget=1500", "polish_budget=300",
@@ -48,14 +45,7 @@ def summary(doc: dict) -> dict:
 
 def diagnose(code: Path, overrides: list[str], outdir: Path) -> tuple[float, float, dict | None]:
     """(process wall s, process CPU s, diagnosis document) of one ``python -m benchmark.diagnose``."""
-    env = dict(os.environ, PYTHONPATH=str(code), MPLBACKEND="Agg")
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "benchmark.diagnose", *overrides, f"hydra.run.dir={outdir}"],
-                          cwd=str(code), env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    wall, cpu, proc = run_timed(code, "benchmark.diagnose", [*overrides, f"hydra.run.dir={outdir}"])
     if proc.returncode != 0:
         sys.stderr.write(proc.stdout[-2000:] + proc.stderr[-4000:])
         return wall, cpu, None
